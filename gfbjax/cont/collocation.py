@@ -1,0 +1,593 @@
+r"""Periodic orbits by orthogonal (Gauss) collocation with condensation of parameters.
+
+Boundary-value problem (Papafragkos et al. 2022, App. A1, Eq. (27)-(29))
+-------------------------------------------------------------------------
+A periodic orbit of the autonomous field ``f(x, lam, args)`` with unknown period
+``T`` is sought on the scaled time ``t in [0, 1]``:
+
+.. math::
+
+    x'(t) = T\, f(x(t), \lambda)                        \quad (27)\\
+    x(0) - x(1) = 0                                      \quad (28)\\
+    \int_0^1 \langle x(t) - \hat x(t), \hat x'(t)\rangle\,dt = 0   \quad (29)
+
+(29) is the integral phase condition against a reference orbit :math:`\hat x`
+(usually the previous point of the branch).  During continuation one more
+scalar equation closes the system, either the pseudo-arclength condition
+(Eq. (30))
+
+.. math::
+
+    \int_0^1 \langle x - x_0, \dot x_0\rangle dt + (T-T_0)\dot T_0
+    + (\lambda-\lambda_0)\dot\lambda_0 - \Delta s = 0
+
+or, for natural-parameter continuation, :math:`\lambda - \lambda_{target} = 0`
+(the same equation with :math:`\dot x_0 = 0, \dot T_0 = 0, \dot\lambda_0 = 1`).
+
+Discretisation
+--------------
+Mesh :math:`0=\tau_0<\dots<\tau_N=1`, :math:`h_j=\tau_{j+1}-\tau_j`.  On each
+interval the orbit is a polynomial of degree ``m`` in Lagrange form on the
+``m+1`` equally spaced nodes :math:`\tau_j + h_j i/m`, ``i = 0..m``.  The
+collocation equations are imposed at the ``m`` Gauss-Legendre points
+:math:`z_k` of every interval (scaled by :math:`h_j`):
+
+.. math::
+
+    r_{jk} = \sum_i \ell_i'(z_k)\,u_{j,i} - h_j T f\Big(\sum_i \ell_i(z_k) u_{j,i}, \lambda\Big) = 0 .
+
+Unknown layout (``Orbit`` and the flat vector used by the dense reference
+path)::
+
+    [ x_0, ..., x_N            mesh-node values,  (N+1)*n   (x_N = x_0 by (28))
+      u_{0,1..m-1}, ...,        interior node values, N*(m-1)*n
+      T, lam ]
+
+Condensation of parameters (AUTO-07p; paper Eq. (45)-(47))
+------------------------------------------------------------
+On interval ``j`` the linearised collocation equations read
+:math:`A_L\delta x_j + A_I \delta w_j + A_R\delta x_{j+1} + B_p\delta p = c_j`
+with :math:`A_I\in R^{mn\times(m-1)n}` and :math:`p=(T,\lambda)`.  A complete
+QR factorisation :math:`A_I = [Q_1\,Q_2] [R_1; 0]` splits them into
+(m-1)n equations that give the interior unknowns
+
+.. math:: \delta w_j = R_1^{-1}Q_1^T(c_j - A_L\delta x_j - A_R\delta x_{j+1} - B_p\delta p)
+
+and ``n`` *condensed* equations
+
+.. math:: C_j\delta x_j + D_j\delta x_{j+1} + G_j\delta p = Q_2^T c_j,
+          \qquad C_j = Q_2^TA_L,\ D_j = Q_2^TA_R,\ G_j = Q_2^TB_p .
+
+This is done for all intervals at once with batched dense algebra.  The
+condensed system is block bidiagonal in the mesh values, bordered by the
+periodicity rows and the two scalar rows (phase, continuation).  It is solved
+by a sequential block QR elimination of ``x_1 .. x_{N-1}`` (``lax.scan``),
+carrying the two bordering rows along, followed by a dense (2n+2) solve for
+``(x_0, x_N, T, lam)`` and back-substitution: O(N n^3) time, O(N n^2) memory.
+The per-interval transfer matrices :math:`\Gamma_j = -D_j^{-1}C_j` map
+:math:`\delta x_j \mapsto \delta x_{j+1}`; their product is the monodromy
+matrix (see ``floquet.py``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, Callable, NamedTuple
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.scipy.linalg import solve_triangular
+
+VectorField = Callable[[jax.Array, jax.Array, Any], jax.Array]
+
+
+# --------------------------------------------------------------------------
+# Collocation scheme constants
+# --------------------------------------------------------------------------
+def _lagrange_matrices(nodes: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Values ``l[k, i] = L_i(pts_k)`` and derivatives ``dl[k, i] = L_i'(pts_k)``."""
+    p = len(nodes)
+    l = np.ones((len(pts), p))
+    dl = np.zeros((len(pts), p))
+    for i in range(p):
+        others = [nodes[q] for q in range(p) if q != i]
+        denom = np.prod([nodes[i] - o for o in others])
+        l[:, i] = np.prod([pts - o for o in others], axis=0) / denom
+        for r in range(len(others)):
+            terms = [pts - o for q, o in enumerate(others) if q != r]
+            dl[:, i] += (np.prod(terms, axis=0) if terms else np.ones_like(pts)) / denom
+    return l, dl
+
+
+class Scheme:
+    """Constants of the degree-``m`` collocation scheme on the unit interval.
+
+    ``nodes``: m+1 equally spaced Lagrange nodes, ``gauss``/``weights``: the m
+    Gauss-Legendre points and weights on [0, 1], ``l``/``dl``: Lagrange basis
+    values and derivatives at the Gauss points, shape (m, m+1).
+    """
+
+    def __init__(self, m: int):
+        if not (isinstance(m, (int, np.integer)) and 2 <= m <= 7):
+            raise ValueError(f"m (collocation points per interval) must be an int in [2, 7], got {m!r}")
+        self.m = int(m)
+        self.nodes = np.linspace(0.0, 1.0, m + 1)
+        g, w = np.polynomial.legendre.leggauss(m)
+        self.gauss = 0.5 * (g + 1.0)
+        self.weights = 0.5 * w
+        self.l, self.dl = _lagrange_matrices(self.nodes, self.gauss)
+
+    def basis_at(self, pts: np.ndarray) -> np.ndarray:
+        """Lagrange basis values at local points ``pts`` in [0,1], shape (len(pts), m+1)."""
+        return _lagrange_matrices(self.nodes, np.asarray(pts, float))[0]
+
+    # hash/eq so that jit caches on the scheme by value
+    def __hash__(self) -> int:
+        return hash(("Scheme", self.m))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Scheme) and other.m == self.m
+
+
+# --------------------------------------------------------------------------
+# Orbit container
+# --------------------------------------------------------------------------
+class Orbit(eqx.Module):
+    """Discrete periodic orbit.
+
+    mesh: (N+1,) increasing, mesh[0]=0, mesh[-1]=1;  xm: (N+1, n) mesh-node
+    values; xi: (N, m-1, n) interior node values;  T: period;  lam: parameter.
+    """
+
+    mesh: jax.Array
+    xm: jax.Array
+    xi: jax.Array
+    T: jax.Array
+    lam: jax.Array
+
+    @property
+    def N(self) -> int:
+        return self.xi.shape[0]
+
+    @property
+    def n(self) -> int:
+        return self.xm.shape[1]
+
+    def nodes(self) -> jax.Array:
+        """Per-interval node values, shape (N, m+1, n)."""
+        return jnp.concatenate([self.xm[:-1, None], self.xi, self.xm[1:, None]], axis=1)
+
+    def to_flat(self) -> jax.Array:
+        return jnp.concatenate([self.xm.ravel(), self.xi.ravel(), jnp.stack([self.T, self.lam])])
+
+    def from_flat(self, v: jax.Array) -> "Orbit":
+        a = self.xm.size
+        b = a + self.xi.size
+        return Orbit(self.mesh, v[:a].reshape(self.xm.shape), v[a:b].reshape(self.xi.shape), v[b], v[b + 1])
+
+    def __add__(self, other: "Orbit") -> "Orbit":
+        return Orbit(self.mesh, self.xm + other.xm, self.xi + other.xi, self.T + other.T, self.lam + other.lam)
+
+    def scale(self, c: Any) -> "Orbit":
+        return Orbit(self.mesh, c * self.xm, c * self.xi, c * self.T, c * self.lam)
+
+
+def uniform_mesh(N: int) -> np.ndarray:
+    if N < 2:
+        raise ValueError(f"N (mesh intervals) must be >= 2, got {N}")
+    return np.linspace(0.0, 1.0, N + 1)
+
+
+def node_times(mesh: Any, scheme: Scheme) -> np.ndarray:
+    """Scaled times of all nodes, shape (N, m+1)."""
+    mesh = np.asarray(mesh, float)
+    h = np.diff(mesh)
+    return mesh[:-1, None] + h[:, None] * scheme.nodes[None, :]
+
+
+def orbit_from_function(x_of_t: Callable[[np.ndarray], np.ndarray], T: float, lam: float,
+                        scheme: Scheme, mesh: Any) -> Orbit:
+    """Sample ``x_of_t(t)`` (t in [0,1], vectorised, returns (len(t), n)) on the nodes."""
+    mesh = np.asarray(mesh, float)
+    t = node_times(mesh, scheme)
+    N, mp1 = t.shape
+    X = np.asarray(x_of_t(t.ravel()), float).reshape(N, mp1, -1)
+    xm = np.concatenate([X[:, 0], X[-1:, -1]], axis=0)
+    xm[-1] = xm[0]
+    return Orbit(jnp.asarray(mesh), jnp.asarray(xm), jnp.asarray(X[:, 1:-1]),
+                 jnp.asarray(float(T)), jnp.asarray(float(lam)))
+
+
+def orbit_from_samples(t: np.ndarray, x: np.ndarray, T: float, lam: float, scheme: Scheme,
+                       mesh: Any) -> Orbit:
+    """Orbit from samples ``x[i] = x(t[i])`` over one period, ``t`` in [t0, t0+T].
+
+    Periodic linear interpolation in the scaled time ``(t - t[0]) / T``.
+    """
+    t = np.asarray(t, float)
+    x = np.asarray(x, float)
+    s = (t - t[0]) / T
+    if s[-1] < 1.0 - 1e-12:
+        s = np.append(s, 1.0)
+        x = np.vstack([x, x[:1]])
+
+    def x_of_t(tt):
+        return np.stack([np.interp(np.mod(tt, 1.0), s, x[:, c]) for c in range(x.shape[1])], axis=1)
+
+    return orbit_from_function(x_of_t, T, lam, scheme, mesh)
+
+
+def evaluate(orbit: Orbit, scheme: Scheme, per_interval: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate the piecewise polynomial on ``per_interval`` points per interval.
+
+    Returns scaled times (N*per_interval + 1,) and states (.., n).
+    """
+    loc = np.linspace(0.0, 1.0, per_interval, endpoint=False)
+    B = scheme.basis_at(loc)
+    U = np.asarray(orbit.nodes())
+    X = np.einsum("qi,jin->jqn", B, U).reshape(-1, U.shape[-1])
+    mesh = np.asarray(orbit.mesh)
+    t = (mesh[:-1, None] + np.diff(mesh)[:, None] * loc[None]).ravel()
+    return np.append(t, 1.0), np.vstack([X, np.asarray(orbit.xm[-1])[None]])
+
+
+# --------------------------------------------------------------------------
+# Functionals:  integral inner products  int_0^1 <a(t), b(t)> dt
+# --------------------------------------------------------------------------
+def _at_gauss(U: jax.Array, scheme: Scheme) -> jax.Array:
+    return jnp.einsum("ki,jin->jkn", scheme.l, U)
+
+
+def integral_coeffs(g: jax.Array, h: jax.Array, scheme: Scheme) -> jax.Array:
+    """Coefficients c (N, m+1, n) with  int <x, g> dt = sum c * nodes(x).
+
+    ``g`` is given at the Gauss points (N, m, n); Gauss quadrature is exact for
+    the piecewise polynomial products that occur.
+    """
+    return jnp.einsum("j,k,ki,jkn->jin", h, scheme.weights, scheme.l, g)
+
+
+def inner(a: Orbit, b: Orbit, scheme: Scheme) -> jax.Array:
+    """<a, b> = int_0^1 <a(t), b(t)> dt + a.T b.T + a.lam b.lam  (norm of Eq. (30))."""
+    h = jnp.diff(a.mesh)
+    ga = _at_gauss(a.nodes(), scheme)
+    gb = _at_gauss(b.nodes(), scheme)
+    return jnp.einsum("j,k,jkn,jkn->", h, scheme.weights, ga, gb) + a.T * b.T + a.lam * b.lam
+
+
+def l2_norm(orbit: Orbit, scheme: Scheme) -> jax.Array:
+    """sqrt( int_0^1 |x(t)|^2 dt )."""
+    h = jnp.diff(orbit.mesh)
+    g = _at_gauss(orbit.nodes(), scheme)
+    return jnp.sqrt(jnp.einsum("j,k,jkn,jkn->", h, scheme.weights, g, g))
+
+
+class Constraint(eqx.Module):
+    """Data of the two scalar rows: phase reference (29) and continuation row (30).
+
+    Continuation row: int <x - base.x, v.x> + (T - base.T) v.T + (lam - base.lam) v.lam - ds.
+    """
+
+    ref: Orbit
+    base: Orbit
+    v: Orbit
+    ds: jax.Array
+
+
+def natural_constraint(ref: Orbit, lam_target: Any) -> Constraint:
+    """Continuation row lam - lam_target = 0 (natural parameter / fixed lam)."""
+    zero = ref.scale(0.0)
+    v = Orbit(ref.mesh, zero.xm, zero.xi, jnp.asarray(0.0), jnp.asarray(1.0))
+    base = Orbit(ref.mesh, ref.xm, ref.xi, ref.T, jnp.asarray(lam_target, dtype=ref.xm.dtype))
+    return Constraint(ref, base, v, jnp.asarray(0.0))
+
+
+def palc_constraint(base: Orbit, tangent: Orbit, ds: Any, ref: Orbit | None = None) -> Constraint:
+    """Pseudo-arclength row (30) around ``base`` along ``tangent``."""
+    return Constraint(base if ref is None else ref, base, tangent, jnp.asarray(ds, dtype=base.xm.dtype))
+
+
+def _functional_coeffs(orbit: Orbit, con: Constraint, scheme: Scheme):
+    """Node coefficients (2, N, m+1, n), parameter coefficients (2, 2) and values (2,)."""
+    h = jnp.diff(orbit.mesh)
+    Uref = con.ref.nodes()
+    dref = jnp.einsum("ki,jin->jkn", scheme.dl, Uref) / h[:, None, None]  # x_hat'(t)
+    c_phase = integral_coeffs(dref, h, scheme)
+    c_cont = integral_coeffs(_at_gauss(con.v.nodes(), scheme), h, scheme)
+    U = orbit.nodes()
+    phase = jnp.sum(c_phase * (U - Uref))
+    cont = (jnp.sum(c_cont * (U - con.base.nodes())) + (orbit.T - con.base.T) * con.v.T
+            + (orbit.lam - con.base.lam) * con.v.lam - con.ds)
+    cp = jnp.array([[0.0, 0.0], [con.v.T, con.v.lam]], dtype=U.dtype)
+    return jnp.stack([c_phase, c_cont]), cp, jnp.stack([phase, cont])
+
+
+# --------------------------------------------------------------------------
+# Residual and linearisation
+# --------------------------------------------------------------------------
+def _f_batched(f: VectorField, X: jax.Array, lam: jax.Array, args: Any) -> jax.Array:
+    g = jax.vmap(lambda x: f(x, lam, args))
+    return jax.vmap(g)(X)
+
+
+def collocation_residual(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme) -> jax.Array:
+    """r_{jk} = sum_i dl_{ki} u_{j,i} - h_j T f(x_{jk}, lam), shape (N, m, n)."""
+    U = orbit.nodes()
+    h = jnp.diff(orbit.mesh)
+    X = _at_gauss(U, scheme)
+    dU = jnp.einsum("ki,jin->jkn", scheme.dl, U)
+    return dU - (h * orbit.T)[:, None, None] * _f_batched(f, X, orbit.lam, args)
+
+
+def residual(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
+    """All residuals: (collocation (N,m,n), periodicity (n,), scalar rows (2,))."""
+    rc = collocation_residual(f, args, orbit, scheme)
+    rper = orbit.xm[0] - orbit.xm[-1]
+    _, _, rs = _functional_coeffs(orbit, con, scheme)
+    return rc, rper, rs
+
+
+class Blocks(NamedTuple):
+    """Per-interval collocation Jacobian blocks (N leading axis)."""
+
+    AL: jax.Array  # (N, mn, n)
+    AI: jax.Array  # (N, mn, (m-1)n)
+    AR: jax.Array  # (N, mn, n)
+    Bp: jax.Array  # (N, mn, 2)  columns d/dT, d/dlam
+
+
+def collocation_blocks(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme) -> Blocks:
+    """Jacobian of the collocation equations, per interval.
+
+    A[k, i] = dl_{ki} I - h T l_{ki} J(x_{jk}), with J = df/dx by ``jax.jacfwd``
+    vmapped over all N*m Gauss points.
+    """
+    m, n, N = scheme.m, orbit.n, orbit.N
+    U = orbit.nodes()
+    h = jnp.diff(orbit.mesh)
+    X = _at_gauss(U, scheme)
+    jac = jax.jacfwd(lambda x, lam: f(x, lam, args), argnums=(0, 1))
+    Fx = jax.vmap(jax.vmap(lambda x: f(x, orbit.lam, args)))(X)
+    J, Jl = jax.vmap(jax.vmap(lambda x: jac(x, orbit.lam)))(X)  # (N,m,n,n), (N,m,n)
+    eye = jnp.eye(n, dtype=U.dtype)
+    hT = (h * orbit.T)[:, None, None, None, None]
+    A = (scheme.dl[None, :, None, :, None] * eye[None, None, :, None, :]
+         - hT * scheme.l[None, :, None, :, None] * J[:, :, :, None, :])
+    A = A.reshape(N, m * n, (m + 1) * n)
+    Bp = jnp.stack([-(h[:, None, None] * Fx), -(h * orbit.T)[:, None, None] * Jl], axis=-1)
+    Bp = Bp.reshape(N, m * n, 2)
+    return Blocks(A[:, :, :n], A[:, :, n:m * n], A[:, :, m * n:], Bp)
+
+
+class Condensed(NamedTuple):
+    """Condensed per-interval equations C dx_j + D dx_{j+1} + G dp = cc and the
+    interior recovery dw = w0 + WL dx_j + WR dx_{j+1} + Wp dp."""
+
+    C: jax.Array
+    D: jax.Array
+    G: jax.Array
+    cc: jax.Array
+    w0: jax.Array
+    WL: jax.Array
+    WR: jax.Array
+    Wp: jax.Array
+
+
+def condense(blocks: Blocks, c: jax.Array) -> Condensed:
+    """Condensation of parameters (paper Eq. (45)-(46)), batched over intervals.
+
+    ``c``: right-hand side of the collocation rows, shape (N, mn).
+    """
+    AL, AI, AR, Bp = blocks
+    k = AI.shape[-1]  # (m-1) n
+    Q, R = jnp.linalg.qr(AI, mode="complete")
+    R1 = R[:, :k, :]
+    Qt = jnp.swapaxes(Q, -1, -2)
+    Q1t, Q2t = Qt[:, :k], Qt[:, k:]
+    solve = jax.vmap(lambda R_, B_: solve_triangular(R_, B_, lower=False))
+    w0 = solve(R1, jnp.einsum("jab,jb->ja", Q1t, c)[..., None])[..., 0]
+    WL = -solve(R1, Q1t @ AL)
+    WR = -solve(R1, Q1t @ AR)
+    Wp = -solve(R1, Q1t @ Bp)
+    return Condensed(Q2t @ AL, Q2t @ AR, Q2t @ Bp, jnp.einsum("jab,jb->ja", Q2t, c), w0, WL, WR, Wp)
+
+
+def _solve_reduced(cond: Condensed, Phi: jax.Array, phip: jax.Array, fb: jax.Array, cper: jax.Array):
+    """Solve the bordered block-bidiagonal reduced system.
+
+    Rows:  C_j dx_j + D_j dx_{j+1} + G_j dp = cc_j  (j=0..N-1);
+           dx_0 - dx_N = cper;   sum_j Phi_j dx_j + phip dp = fb  (2 rows).
+    Sequential block-QR elimination of dx_1..dx_{N-1} with ``lax.scan``.
+    """
+    C, D, G, cc = cond.C, cond.D, cond.G, cond.cc
+    n = C.shape[-1]
+
+    def step(carry, xs):
+        A0, Aj, Ap, b, F0, Fj, Fp, fbb = carry
+        Cj, Dj, Gj, ccj, Phinext = xs
+        Mj = jnp.concatenate([Aj, Cj], axis=0)
+        Q, R = jnp.linalg.qr(Mj, mode="complete")
+        Qt = Q.T
+        z = jnp.zeros_like(A0)
+        X0 = Qt @ jnp.concatenate([A0, z], axis=0)
+        X1 = Qt @ jnp.concatenate([z, Dj], axis=0)
+        Xp = Qt @ jnp.concatenate([Ap, Gj], axis=0)
+        Xb = Qt @ jnp.concatenate([b, ccj], axis=0)
+        Rt = R[:n]
+        piv = (Rt, X0[:n], X1[:n], Xp[:n], Xb[:n])
+        K = solve_triangular(Rt, Fj.T, lower=False, trans="T").T  # Fj Rt^{-1}
+        new = (X0[n:], X1[n:], Xp[n:], Xb[n:],
+               F0 - K @ X0[:n], Phinext - K @ X1[:n], Fp - K @ Xp[:n], fbb - K @ Xb[:n])
+        return new, piv
+
+    init = (C[0], D[0], G[0], cc[0], Phi[0], Phi[1], phip, fb)
+    carry, piv = jax.lax.scan(step, init, (C[1:], D[1:], G[1:], cc[1:], Phi[2:]))
+    A0, AN, Ap, b, F0, FN, Fp, fbb = carry
+    eye = jnp.eye(n, dtype=C.dtype)
+    top = jnp.concatenate([A0, AN, Ap], axis=1)
+    mid = jnp.concatenate([eye, -eye, jnp.zeros((n, 2), C.dtype)], axis=1)
+    bot = jnp.concatenate([F0, FN, Fp], axis=1)
+    z = jnp.linalg.solve(jnp.concatenate([top, mid, bot], axis=0), jnp.concatenate([b, cper, fbb]))
+    dx0, dxN, dp = z[:n], z[n:2 * n], z[2 * n:]
+
+    def back(dxnext, pv):
+        Rt, P0, P1, Pp, pb = pv
+        dxj = solve_triangular(Rt, pb - P0 @ dx0 - P1 @ dxnext - Pp @ dp, lower=False)
+        return dxj, dxj
+
+    _, dxs = jax.lax.scan(back, dxN, piv, reverse=True)
+    dxm = jnp.concatenate([dx0[None], dxs, dxN[None]], axis=0)
+    return dxm, dp
+
+
+def linear_solve(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme,
+                 rc: jax.Array, rper: jax.Array, rs: jax.Array) -> Orbit:
+    """Solve  J delta = (rc, rper, rs)  with J the Jacobian of ``residual``; condensed path."""
+    N, m, n = orbit.N, scheme.m, orbit.n
+    blocks = collocation_blocks(f, args, orbit, scheme)
+    cond = condense(blocks, rc.reshape(N, m * n))
+    coef, cp, _ = _functional_coeffs(orbit, con, scheme)  # (2, N, m+1, n)
+    aL = jnp.moveaxis(coef[:, :, 0], 0, 1)  # (N, 2, n)
+    aI = jnp.moveaxis(coef[:, :, 1:m].reshape(2, N, (m - 1) * n), 0, 1)
+    aR = jnp.moveaxis(coef[:, :, m], 0, 1)
+    phiL = aL + aI @ cond.WL
+    phiR = aR + aI @ cond.WR
+    phip = cp + jnp.sum(aI @ cond.Wp, axis=0)
+    fb = rs - jnp.einsum("jab,jb->a", aI, cond.w0)
+    Phi = jnp.zeros((N + 1, 2, n), orbit.xm.dtype).at[:-1].add(phiL).at[1:].add(phiR)
+    dxm, dp = _solve_reduced(cond, Phi, phip, fb, rper)
+    dw = (cond.w0 + jnp.einsum("jab,jb->ja", cond.WL, dxm[:-1])
+          + jnp.einsum("jab,jb->ja", cond.WR, dxm[1:]) + cond.Wp @ dp)
+    return Orbit(orbit.mesh, dxm, dw.reshape(N, m - 1, n), dp[0], dp[1])
+
+
+def transfer_blocks(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme) -> tuple[jax.Array, jax.Array]:
+    """Condensed blocks (C_j, D_j) at ``orbit``; Gamma_j = -D_j^{-1} C_j."""
+    N, m, n = orbit.N, scheme.m, orbit.n
+    blocks = collocation_blocks(f, args, orbit, scheme)
+    cond = condense(blocks, jnp.zeros((N, m * n), orbit.xm.dtype))
+    return cond.C, cond.D
+
+
+def transfer_matrices(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme) -> jax.Array:
+    """Gamma_j = -D_j^{-1} C_j, (N, n, n): linearised map x_j -> x_{j+1} at fixed T, lam."""
+    C, D = transfer_blocks(f, args, orbit, scheme)
+    return -jnp.linalg.solve(D, C)
+
+
+def interior_response(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme, dxm: jax.Array) -> jax.Array:
+    """Interior values of the linearised (homogeneous) solution with mesh values dxm."""
+    N, m, n = orbit.N, scheme.m, orbit.n
+    blocks = collocation_blocks(f, args, orbit, scheme)
+    cond = condense(blocks, jnp.zeros((N, m * n), orbit.xm.dtype))
+    dw = jnp.einsum("jab,jb->ja", cond.WL, dxm[:-1]) + jnp.einsum("jab,jb->ja", cond.WR, dxm[1:])
+    return dw.reshape(N, m - 1, n)
+
+
+# --------------------------------------------------------------------------
+# Dense reference path (small problems / tests only)
+# --------------------------------------------------------------------------
+def dense_jacobian(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> jax.Array:
+    """Full Jacobian of the flattened residual w.r.t. ``orbit.to_flat()`` (dense!)."""
+
+    def F(v):
+        rc, rper, rs = residual(f, args, orbit.from_flat(v), con, scheme)
+        return jnp.concatenate([rc.ravel(), rper, rs])
+
+    return jax.jacfwd(F)(orbit.to_flat())
+
+
+def dense_newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
+    """Reference Newton step by a dense solve (O((Nmn)^3)); for verification only."""
+    rc, rper, rs = residual(f, args, orbit, con, scheme)
+    r = jnp.concatenate([rc.ravel(), rper, rs])
+    J = dense_jacobian(f, args, orbit, con, scheme)
+    return orbit.from_flat(-jnp.linalg.solve(J, r))
+
+
+# --------------------------------------------------------------------------
+# Newton corrector
+# --------------------------------------------------------------------------
+@partial(jax.jit, static_argnums=(0, 4))
+def _newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
+    rc, rper, rs = residual(f, args, orbit, con, scheme)
+    rnorm = jnp.maximum(jnp.max(jnp.abs(rc)), jnp.maximum(jnp.max(jnp.abs(rper)), jnp.max(jnp.abs(rs))))
+    d = linear_solve(f, args, orbit, con, scheme, -rc, -rper, -rs)
+    dnorm = jnp.max(jnp.abs(d.to_flat()))
+    return orbit + d, rnorm, dnorm
+
+
+def newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
+    """One condensed Newton step delta (not applied)."""
+    new, _, _ = _newton_step(f, args, orbit, con, scheme)
+    return Orbit(orbit.mesh, new.xm - orbit.xm, new.xi - orbit.xi, new.T - orbit.T, new.lam - orbit.lam)
+
+
+@partial(jax.jit, static_argnums=(0, 4))
+def _residual_norm(f, args, orbit, con, scheme):
+    rc, rper, rs = residual(f, args, orbit, con, scheme)
+    return jnp.maximum(jnp.max(jnp.abs(rc)), jnp.maximum(jnp.max(jnp.abs(rper)), jnp.max(jnp.abs(rs))))
+
+
+@partial(jax.jit, static_argnums=(0, 4))
+def tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
+    """Tangent of the solution curve (paper Eq. (34)): J_aug tau = e_cont, normalised.
+
+    The continuation row of ``con`` (previous tangent, or d/dlam for a fresh
+    start) fixes the orientation: <tau, con.v> > 0.
+    """
+    N, m, n = orbit.N, scheme.m, orbit.n
+    z = orbit.xm.dtype
+    t = linear_solve(f, args, orbit, con, scheme, jnp.zeros((N, m, n), z), jnp.zeros((n,), z),
+                     jnp.array([0.0, 1.0], z))
+    return t.scale(1.0 / jnp.sqrt(inner(t, t, scheme)))
+
+
+STATUS_CONVERGED = 0
+STATUS_MAXITER = 1
+STATUS_NONFINITE = 2
+STATUS_DIVERGED = 3
+_REASONS = {STATUS_CONVERGED: "converged", STATUS_MAXITER: "maximum Newton iterations reached",
+            STATUS_NONFINITE: "non-finite residual or step", STATUS_DIVERGED: "Newton step grew (diverging)"}
+
+
+@dataclass(frozen=True)
+class NewtonResult:
+    """Outcome of a Newton correction.  ``orbit`` is the last finite iterate."""
+
+    orbit: Orbit
+    status: int
+    reason: str
+    iterations: int
+    residual_norm: float
+    step_norm: float
+
+    @property
+    def converged(self) -> bool:
+        return self.status == STATUS_CONVERGED
+
+
+def newton(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme, *,
+           tol: float = 1e-10, rtol_step: float = 1e-10, max_iter: int = 12,
+           divergence_factor: float = 1e3) -> NewtonResult:
+    """Newton corrector: converged when max|residual| <= tol and the last step
+    <= rtol_step * (1 + max|x|).  Never returns a non-finite orbit."""
+    res_hist = []
+    dn = np.inf
+    for it in range(1, max_iter + 1):
+        new, rn, dn = _newton_step(f, args, orbit, con, scheme)
+        rn, dn = float(rn), float(dn)
+        if not (np.isfinite(rn) and np.isfinite(dn)) or not bool(jnp.all(jnp.isfinite(new.to_flat()))):
+            return NewtonResult(orbit, STATUS_NONFINITE, _REASONS[STATUS_NONFINITE], it, rn, dn)
+        res_hist.append(dn)
+        if len(res_hist) >= 3 and dn > divergence_factor * min(res_hist[:-1]):
+            return NewtonResult(orbit, STATUS_DIVERGED, _REASONS[STATUS_DIVERGED], it, rn, dn)
+        orbit = new
+        scale = 1.0 + float(jnp.max(jnp.abs(orbit.xm)))
+        if dn <= rtol_step * scale:
+            rfin = float(_residual_norm(f, args, orbit, con, scheme))
+            if rfin <= tol or rfin <= rn:
+                return NewtonResult(orbit, STATUS_CONVERGED, _REASONS[STATUS_CONVERGED], it, rfin, dn)
+    return NewtonResult(orbit, STATUS_MAXITER, _REASONS[STATUS_MAXITER], max_iter, rn, dn)

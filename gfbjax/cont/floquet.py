@@ -1,0 +1,179 @@
+r"""Floquet multipliers from the condensed collocation blocks.
+
+The monodromy matrix is the product of the per-interval transfer matrices
+:math:`M = \Gamma_{N-1}\cdots\Gamma_0`, :math:`\Gamma_j = -D_j^{-1}C_j` (see
+``collocation.py``).  Its eigenvalues are the Floquet multipliers; one of them
+is (up to discretisation error) the trivial multiplier +1 of the autonomous
+orbit.
+
+Two methods are provided:
+
+``multipliers_product``
+    eigenvalues of the explicitly formed product.  Simple, but every entry of
+    the product carries an absolute error ~ eps * ||M||, so multipliers much
+    smaller than eps * max|mu| are pure round-off.
+
+``multipliers_periodic``
+    product-eigenvalue method by *periodic QR (orthogonal) iteration*.  A sweep
+    factors :math:`\Gamma_j Q_j = Q_{j+1} R_j` (QR) for j = 0..N-1, so that
+
+    .. math:: Q_0^T M Q_0 = (Q_0^T Q_N)\, R_{N-1}\cdots R_0 .
+
+    Sweeps are repeated with :math:`Q_0 \leftarrow Q_N` (started from the Schur
+    vectors of the explicit product, ordered by decreasing modulus) until
+    :math:`B = Q_0^TQ_N` is block diagonal (1x1 blocks +-1, 2x2 blocks for
+    complex pairs / equal moduli).  Then :math:`Q_0^TMQ_0` is quasi-triangular
+    and each eigenvalue comes from a diagonal block,
+    :math:`\mu_k = B_{kk}\prod_j (R_j)_{kk}`, accumulated as a sum of
+    logarithms: every multiplier gets a *relative* accuracy, no matter how
+    many decades the multipliers span (this is the periodic Schur idea of
+    Bojanczyk/Golub/Van Dooren, realised by subspace iteration).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+
+def multipliers_product(G: np.ndarray) -> np.ndarray:
+    """Eigenvalues of the explicitly formed product G[N-1] @ ... @ G[0]."""
+    G = np.asarray(G)
+    M = np.eye(G.shape[-1])
+    for g in G:
+        M = g @ M
+    return np.linalg.eigvals(M)
+
+
+@jax.jit
+def _sweep(G: jax.Array, Q0: jax.Array):
+    def step(Q, g):
+        Qn, R = jnp.linalg.qr(g @ Q)
+        # make diag(R) >= 0 so that Q converges (not only its span)
+        s = jnp.where(jnp.diagonal(R) < 0, -1.0, 1.0)
+        return Qn * s[None, :], R * s[:, None]
+
+    QN, Rs = jax.lax.scan(step, Q0, G)
+    return QN, Rs
+
+
+def _blocks(B: np.ndarray, tol: float) -> tuple[list[tuple[int, int]], float]:
+    """Greedy 1x1/2x2 partition of an (almost) block-diagonal orthogonal B and
+    the size of what is left outside the blocks (the convergence measure)."""
+    n = B.shape[0]
+    blocks = []
+    k = 0
+    while k < n:
+        if k + 1 < n and abs(B[k + 1, k]) > tol:
+            blocks.append((k, 2))
+            k += 2
+        else:
+            blocks.append((k, 1))
+            k += 1
+    mask = np.tril(np.ones_like(B, dtype=bool), -1)
+    for k, s in blocks:
+        if s == 2:
+            mask[k + 1, k] = False
+    return blocks, float(np.max(np.abs(B[mask]), initial=0.0))
+
+
+@dataclass(frozen=True)
+class PeriodicQRResult:
+    multipliers: np.ndarray   # complex, sorted by decreasing modulus
+    log_abs: np.ndarray       # log|mu| (finite even where mu under/overflows)
+    sweeps: int
+    off_block: float          # size of B outside its block diagonal (0 = exact)
+    converged: bool
+
+
+def multipliers_periodic(G: np.ndarray, *, tol: float = 1e-12, max_sweeps: int = 60,
+                         block_tol: float = 1e-6) -> PeriodicQRResult:
+    """Eigenvalues of G[N-1] ... G[0] by periodic QR iteration (see module doc)."""
+    G = np.asarray(G, float)
+    n = G.shape[-1]
+    M = np.eye(n)
+    for g in G:
+        M = g @ M
+    Q0 = _descending_basis(M)
+    blocks: list = []
+    B = np.eye(n)
+    Gj = jnp.asarray(G)
+    off = np.inf
+    sweeps = 0
+    for sweeps in range(1, max_sweeps + 1):
+        QN, Rs = _sweep(Gj, jnp.asarray(Q0))
+        QN = np.asarray(QN)
+        B = Q0.T @ QN
+        blocks, off = _blocks(B, block_tol)
+        Q0 = QN
+        if off < tol:
+            break
+    Rs = np.asarray(Rs)
+    mus, logs = [], []
+    for k, s in blocks:
+        if s == 1:
+            d = Rs[:, k, k]
+            la = float(np.sum(np.log(np.abs(d)))) + np.log(abs(B[k, k]))
+            sign = np.sign(B[k, k]) * np.prod(np.sign(d))
+            mus.append(complex(sign * np.exp(la)))
+            logs.append(la)
+        else:
+            P = np.eye(2)
+            lsc = 0.0
+            for R in Rs:
+                P = R[k:k + 2, k:k + 2] @ P
+                sc = np.max(np.abs(P))
+                P /= sc
+                lsc += np.log(sc)
+            e = np.linalg.eigvals(B[k:k + 2, k:k + 2] @ P)
+            for ee in e:
+                la = lsc + np.log(abs(ee)) if ee != 0 else -np.inf
+                mus.append(complex(np.exp(la) * ee / abs(ee)) if ee != 0 else 0j)
+                logs.append(la)
+    mus = np.array(mus)
+    logs = np.array(logs)
+    o = np.argsort(-logs, kind="stable")
+    return PeriodicQRResult(mus[o], logs[o], sweeps, off, off < tol)
+
+
+def _descending_basis(M: np.ndarray) -> np.ndarray:
+    """Orthonormal basis whose leading k columns approximate the dominant
+    k-dimensional invariant subspaces of M (QR of the eigenvectors sorted by
+    decreasing modulus; a complex pair contributes Re v, Im v)."""
+    ev, V = np.linalg.eig(M)
+    order = np.argsort(-np.abs(ev), kind="stable")
+    cols = []
+    used = np.zeros(len(ev), bool)
+    for i in order:
+        if used[i]:
+            continue
+        used[i] = True
+        v = V[:, i]
+        if abs(ev[i].imag) > 0:
+            cols += [v.real, v.imag]
+            j = np.argmin(np.abs(ev - np.conj(ev[i])) + used * 1e300)
+            used[j] = True
+        else:
+            cols.append(v.real)
+    Q, _ = np.linalg.qr(np.array(cols[: len(ev)]).T)
+    return Q
+
+
+def trivial_index(mu: np.ndarray, count: int = 1) -> np.ndarray:
+    """Indices of the ``count`` multipliers closest to +1."""
+    return np.argsort(np.abs(np.asarray(mu) - 1.0))[:count]
+
+
+def trivial_error(mu: np.ndarray) -> float:
+    """Distance of the multiplier closest to +1 from +1."""
+    return float(np.min(np.abs(np.asarray(mu) - 1.0)))
+
+
+def nontrivial(mu: np.ndarray, count: int = 1) -> np.ndarray:
+    """Multipliers with the ``count`` ones closest to +1 removed."""
+    mu = np.asarray(mu)
+    keep = np.ones(len(mu), bool)
+    keep[trivial_index(mu, count)] = False
+    return mu[keep]

@@ -1,0 +1,352 @@
+"""Physical (SI) description of a rotor on two gas foil bearings and its dimensionless groups.
+
+Everything a user types is SI (or a dimensionless design value that the paper itself quotes, such as
+``alpha_f`` or ``k_s_bar``).  :func:`SystemSpec.nondim` turns it into :class:`Params`, the equinox PyTree
+that every solver in gfbjax consumes.  Conventions follow ``DESIGN.md`` (corrected Eq. 14 of the paper):
+
+* time scale ``t* = 6 mu R^2 / (p0 c^2)`` [s]; dimensionless time ``tau = t / t*``;
+* speed ``Omega_bar = Omega t*`` — identical to the bearing number ``Lambda = 6 mu Omega R^2 / (p0 c^2)``;
+* lengths over the radial clearance ``c``; pressures over ambient ``p0``; forces over ``p0 R L``;
+* ``zeta = p0 R L t*^2 / (m_j c)`` (gas force -> journal acceleration);
+* ``sigma = g t*^2 / c`` (gravity; the paper prints R^2 where R^4 belongs);
+* ``k_s_bar = k_s t*^2 / m_d`` (shaft lateral stiffness at the disc);
+* ``alpha_f`` bump-foil compliance per area, ``p0 * (compliance [m/Pa]) / c``; ``k_f_bar = 1 / alpha_f``;
+* ``eta`` structural loss factor of the foil, ``c_f_bar = eta k_f_bar / Omega_bar``;
+* ``kappa = R / L``; ``eps = e_u / c`` unbalance eccentricity, with ``e_u = G / Omega_r`` (ISO 1940, G in mm/s,
+  ``Omega_r = 2500 rad/s`` by default) unless ``e_u`` is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import equinox as eqx
+
+__all__ = [
+    "SystemSpec",
+    "Params",
+    "ParameterError",
+    "reference_system",
+    "variation",
+    "validation_case",
+    "VARIATIONS",
+    "load_config",
+    "system_from_name_or_file",
+    "bump_foil_compliance",
+    "unbalance_eccentricity",
+]
+
+ROTORS = ("jeffcott", "rigid")
+
+
+class ParameterError(ValueError):
+    """Raised for an input outside its allowed range; the message names the field, its value and the range."""
+
+
+def _check_range(name: str, value: Any, lo: float | None, hi: float | None, *, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = "") -> None:
+    """Check ``lo (<|<=) value (<|<=) hi`` and that value is a finite real number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    if not math.isfinite(value):
+        raise ParameterError(f"{name} must be finite, got {value!r}")
+    bad = (lo is not None and (value <= lo if lo_open else value < lo)) or (
+        hi is not None and (value >= hi if hi_open else value > hi))
+    if bad:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        u = f" {unit}" if unit else ""
+        raise ParameterError(f"{name} = {value!r}{u} is outside the allowed range {left}{lo_s}, {hi_s}{right}{u}")
+
+
+def _check_int(name: str, value: Any, lo: int, hi: int, why: str = "") -> None:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ParameterError(f"{name} must be an integer, got {value!r}")
+    if not lo <= value <= hi:
+        extra = f" ({why})" if why else ""
+        raise ParameterError(f"{name} = {value} is outside the allowed range [{lo}, {hi}]{extra}")
+
+
+def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, p0: float, c: float) -> float:
+    """Dimensionless bump-foil compliance per area (paper, Abbreviations; Heshmat's bump formula [27]).
+
+    ``alpha_f = 2 p0 (l0/t_b)^3 (1 - nu^2) s0 / (c E)``
+
+    Args:
+        l0: half length of one bump [m].
+        t_b: foil thickness [m].
+        s0: bump pitch [m].
+        E: Young's modulus of the foil [Pa].
+        nu: Poisson's ratio [-], in [0, 0.5).
+        p0: ambient pressure [Pa].
+        c: radial clearance [m].
+    """
+    for name, v in (("l0", l0), ("t_b", t_b), ("s0", s0), ("E", E), ("p0", p0), ("c", c)):
+        _check_range(name, v, 0.0, None, lo_open=True)
+    _check_range("nu", nu, 0.0, 0.5, hi_open=True)
+    return 2.0 * p0 * (l0 / t_b) ** 3 * (1.0 - nu**2) * s0 / (c * E)
+
+
+def unbalance_eccentricity(G: float, omega_r: float = 2500.0) -> float:
+    """Unbalance eccentricity ``e_u = G / Omega_r`` [m] for ISO 1940 grade ``G`` [mm/s] at service speed
+    ``omega_r`` [rad/s] (paper Eq. 16 in consistent units: G2.5 at 2500 rad/s gives 1.0 um)."""
+    _check_range("G", G, 0.0, 100.0, unit="mm/s")
+    _check_range("omega_r", omega_r, 0.0, None, lo_open=True, unit="rad/s")
+    return G * 1e-3 / omega_r
+
+
+@dataclass(frozen=True)
+class SystemSpec:
+    """A flexible (Jeffcott) or rigid rotor on two identical gas foil bearings, in SI units.
+
+    The defaults are the project's reference system (DESIGN.md): ``R = 19.05 mm``, ``L/D = 1``,
+    ``R/c = 500``, air at 20 C, ``k_s_bar = 1``, ``alpha_f = 0.1``, ``eta = 0.05``, unbalance G6.3.
+
+    Attributes:
+        R: journal radius [m].
+        L: bearing length [m].
+        c: nominal radial clearance [m].
+        mu: gas dynamic viscosity [Pa s].
+        p0: ambient pressure [Pa].
+        g: gravitational acceleration [m/s^2] (0 for a vertical rotor).
+        m_j: mass lumped at each journal [kg] (rigid rotor: rotor mass per bearing).
+        m_d: disc mass [kg] (Jeffcott rotor only).
+        k_s_bar: dimensionless shaft stiffness ``k_s t*^2 / m_d`` [-] (Jeffcott rotor only).
+        alpha_f: dimensionless bump-foil compliance per area [-]; see :func:`bump_foil_compliance`.
+        eta: structural loss factor of the bump foil [-].
+        G: ISO 1940 balance grade [mm/s]; ignored when ``e_u`` is given.  0 is a balanced rotor.
+        e_u: unbalance eccentricity [m]; overrides ``G``.
+        omega_r: service speed that defines ``e_u`` from ``G`` [rad/s].
+        rotor: ``"jeffcott"`` (4 DoF: journals + disc, Eq. 12) or ``"rigid"`` (2 DoF journal).
+        theta0: angle of the foil's fixed end [rad], from the horizontal x axis towards the vertical y axis
+            (y points up; the rotor spins from x towards y).  Default pi/2: the foil is clamped at the top.
+        load: extra static vertical load per bearing [N], downwards, added to gravity.
+        Nx: circumferential finite-difference intervals over the 2 pi of the foil.
+        Nz: axial intervals over the half length (edge to mid-plane).
+        gumbel_width: width of the smoothed ``max(p - 1, 0)`` of the Gumbel condition [-]; 0 = exact max.
+    """
+
+    R: float = 19.05e-3
+    L: float = 38.1e-3
+    c: float = 38.1e-6
+    mu: float = 1.8e-5
+    p0: float = 1.0e5
+    g: float = 9.81
+    m_j: float = 0.5
+    m_d: float = 1.0
+    k_s_bar: float = 1.0
+    alpha_f: float = 0.1
+    eta: float = 0.05
+    G: float = 6.3
+    e_u: float | None = None
+    omega_r: float = 2500.0
+    rotor: str = "jeffcott"
+    theta0: float = math.pi / 2
+    load: float = 0.0
+    Nx: int = 40
+    Nz: int = 6
+    gumbel_width: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    # -- checks -------------------------------------------------------------------------------------------
+    def validate(self) -> None:
+        """Check every field; raise :class:`ParameterError` naming the first field out of range."""
+        _check_range("R", self.R, 0.0, 10.0, lo_open=True, unit="m")
+        _check_range("L", self.L, 0.0, 10.0, lo_open=True, unit="m")
+        _check_range("c", self.c, 0.0, 0.05 * self.R, lo_open=True, unit="m")
+        _check_range("mu", self.mu, 0.0, 1.0, lo_open=True, unit="Pa s")
+        _check_range("p0", self.p0, 0.0, 1e8, lo_open=True, unit="Pa")
+        _check_range("g", self.g, 0.0, 1e3, unit="m/s^2")
+        _check_range("m_j", self.m_j, 0.0, 1e5, lo_open=True, unit="kg")
+        if self.rotor not in ROTORS:
+            raise ParameterError(f"rotor = {self.rotor!r} is not one of {ROTORS}")
+        if self.rotor == "jeffcott":
+            _check_range("m_d", self.m_d, 0.0, 1e5, lo_open=True, unit="kg")
+            _check_range("k_s_bar", self.k_s_bar, 0.0, 1e4, lo_open=True)
+        _check_range("alpha_f", self.alpha_f, 0.0, 100.0, lo_open=True)
+        # eta = 0 would make Eq. (10) algebraic (a massless undamped strip): not an ODE any more.
+        _check_range("eta", self.eta, 0.0, 100.0, lo_open=True)
+        if self.e_u is None:
+            _check_range("G", self.G, 0.0, 100.0, unit="mm/s")
+            _check_range("omega_r", self.omega_r, 0.0, None, lo_open=True, unit="rad/s")
+        else:
+            _check_range("e_u", self.e_u, 0.0, self.c, unit="m")
+        _check_range("theta0", self.theta0, -2 * math.pi, 2 * math.pi, unit="rad")
+        _check_range("load", self.load, 0.0, None, unit="N")
+        _check_int("Nx", self.Nx, 16, 1024, "fewer than 16 intervals cannot resolve the film's converging wedge")
+        _check_int("Nz", self.Nz, 2, 256, "at least 2 axial intervals over the half length")
+        _check_range("gumbel_width", self.gumbel_width, 0.0, 0.1)
+
+    # -- derived scales -----------------------------------------------------------------------------------
+    @property
+    def t_star(self) -> float:
+        """Time scale ``t* = 6 mu R^2 / (p0 c^2)`` [s]."""
+        return 6.0 * self.mu * self.R**2 / (self.p0 * self.c**2)
+
+    @property
+    def eccentricity_u(self) -> float:
+        """Unbalance eccentricity ``e_u`` [m]."""
+        return self.e_u if self.e_u is not None else unbalance_eccentricity(self.G, self.omega_r)
+
+    @property
+    def force_scale(self) -> float:
+        """Force unit ``p0 R L`` [N] of dimensionless bearing forces."""
+        return self.p0 * self.R * self.L
+
+    @property
+    def bearing_weight(self) -> float:
+        """Static gravity load carried by each bearing [N]."""
+        m = self.m_j + (self.m_d / 2 if self.rotor == "jeffcott" else 0.0)
+        return m * self.g
+
+    def omega_bar(self, rpm: float) -> float:
+        """Dimensionless speed of a shaft speed in rpm."""
+        return rpm * 2 * math.pi / 60 * self.t_star
+
+    def rpm(self, omega_bar: float) -> float:
+        """Shaft speed in rpm of a dimensionless speed."""
+        return omega_bar / self.t_star * 60 / (2 * math.pi)
+
+    def replace(self, **changes: Any) -> "SystemSpec":
+        """A copy with some fields changed (checked again)."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise ParameterError(f"unknown field(s) {sorted(unknown)}; allowed: {sorted(_FIELDS)}")
+        return dataclasses.replace(self, **changes)
+
+    def nondim(self) -> "Params":
+        """The dimensionless groups (DESIGN.md, corrected Eq. 14) as a :class:`Params` PyTree."""
+        ts = self.t_star
+        m_j = self.m_j
+        jeff = self.rotor == "jeffcott"
+        return Params(
+            kappa=self.R / self.L,
+            zeta=self.p0 * self.R * self.L * ts**2 / (m_j * self.c),
+            sigma=self.g * ts**2 / self.c,
+            k_s=self.k_s_bar if jeff else 0.0,
+            mass_ratio=self.m_d / (2.0 * m_j) if jeff else 0.0,
+            alpha_f=self.alpha_f,
+            eta=self.eta,
+            eps=self.eccentricity_u / self.c,
+            w_ext=self.load / self.force_scale,
+            theta0=self.theta0,
+            Nx=self.Nx,
+            Nz=self.Nz,
+            rotor=self.rotor,
+            gumbel_width=self.gumbel_width,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+_FIELDS = {f.name for f in dataclasses.fields(SystemSpec)}
+
+
+class Params(eqx.Module):
+    """Dimensionless parameters of the GFB-rotor system (a PyTree: ``jax.grad``/``jax.vmap`` reach the floats).
+
+    Float fields (all dimensionless): ``kappa = R/L``; ``zeta``, ``sigma`` (Eq. 14, corrected); ``k_s`` shaft
+    stiffness ``k_s_bar``; ``mass_ratio = m_d / (2 m_j)`` (Eq. 12a); ``alpha_f`` foil compliance; ``eta`` foil
+    loss factor; ``eps = e_u / c`` unbalance; ``w_ext`` extra vertical load per bearing over ``p0 R L``;
+    ``theta0`` foil fixed end [rad].  Static fields (part of the tree structure; changing them recompiles):
+    grid ``Nx``, ``Nz``, ``rotor`` kind and ``gumbel_width``.
+    """
+
+    kappa: float
+    zeta: float
+    sigma: float
+    k_s: float
+    mass_ratio: float
+    alpha_f: float
+    eta: float
+    eps: float
+    w_ext: float
+    theta0: float
+    Nx: int = eqx.field(static=True)
+    Nz: int = eqx.field(static=True)
+    rotor: str = eqx.field(static=True, default="jeffcott")
+    gumbel_width: float = eqx.field(static=True, default=0.0)
+
+
+# -- named systems ----------------------------------------------------------------------------------------
+
+def reference_system(**overrides: Any) -> SystemSpec:
+    """The project's reference system (DESIGN.md): k_s_bar = 1, alpha_f = 0.1, eta = 0.05, G6.3."""
+    return SystemSpec().replace(**overrides) if overrides else SystemSpec()
+
+
+VARIATIONS: dict[str, dict[str, Any]] = {
+    "reference": {},
+    "ks0.3": {"k_s_bar": 0.3},
+    "ks3": {"k_s_bar": 3.0},
+    "af0.01": {"alpha_f": 0.01},
+    "af1": {"alpha_f": 1.0},
+    "eta0.005": {"eta": 0.005},
+    "eta0.5": {"eta": 0.5},
+    "G0": {"G": 0.0},
+    "G1": {"G": 1.0},
+    "G2.5": {"G": 2.5},
+    "G6.3": {"G": 6.3},
+}
+
+
+def validation_case(load_per_bearing: float = 10.0, **overrides: Any) -> SystemSpec:
+    """The paper's validation case (Table 1; Zhou et al. 2021): rigid rotor, balanced, on two GFBs.
+
+    ``k_f = 4.6417 GN/m^3`` gives ``alpha_f = p0 / (k_f c)``; the rotor mass per bearing is ``load / g``.
+
+    Args:
+        load_per_bearing: static load per bearing [N] (10 N in the text, 15 N in Table 1).
+    """
+    _check_range("load_per_bearing", load_per_bearing, 0.0, None, lo_open=True, unit="N")
+    p0, c, g = 1.01325e5, 31.8e-6, 9.81
+    spec = dict(R=19.05e-3, L=38.1e-3, c=c, mu=1.95e-5, p0=p0, g=g, m_j=load_per_bearing / g, m_d=1.0,
+                alpha_f=p0 / (4.6417e9 * c), eta=0.25, G=0.0, rotor="rigid")
+    spec.update(overrides)
+    return SystemSpec(**spec)
+
+
+def variation(name: str, **overrides: Any) -> SystemSpec:
+    """A named system: ``reference``, a design variation of the paper (``ks0.3``, ``ks3``, ``af0.01``, ``af1``,
+    ``eta0.005``, ``eta0.5``, ``G0``, ``G1``, ``G2.5``, ``G6.3``) or ``validation10N`` / ``validation15N``."""
+    if name in VARIATIONS:
+        return SystemSpec(**{**VARIATIONS[name], **overrides})
+    if name in ("validation10N", "validation15N"):
+        return validation_case(10.0 if name == "validation10N" else 15.0, **overrides)
+    allowed = sorted(VARIATIONS) + ["validation10N", "validation15N"]
+    raise ParameterError(f"system = {name!r} is not a named system; allowed: {allowed} or a .toml file")
+
+
+def load_config(path: str | Path) -> SystemSpec:
+    """Read a TOML file of :class:`SystemSpec` fields (SI units).  An optional ``base`` key names a built-in
+    system to start from.  Unknown keys are an error naming them."""
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"config file {str(path)!r} does not exist")
+    with path.open("rb") as fh:
+        try:
+            data = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as exc:
+            raise ParameterError(f"config file {str(path)!r} is not valid TOML: {exc}") from exc
+    base = data.pop("base", "reference")
+    unknown = set(data) - _FIELDS
+    if unknown:
+        raise ParameterError(f"unknown key(s) {sorted(unknown)} in {str(path)!r}; allowed: {sorted(_FIELDS)}")
+    return variation(base, **data)
+
+
+def system_from_name_or_file(name: str) -> SystemSpec:
+    """A named system (see :func:`variation`) or, for a path ending in ``.toml``, :func:`load_config`."""
+    if name.endswith(".toml"):
+        return load_config(name)
+    return variation(name)

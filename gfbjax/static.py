@@ -1,0 +1,291 @@
+"""Static equilibria of the balanced GFB-rotor system (paper Sect. 3.1, Figs. 4-5).
+
+An equilibrium solves ``f(s, Omega_bar) = 0`` for the balanced vector field (no unbalance), all states at once
+(pressures, foil strips, rotor positions and zero velocities), by Newton's method with the exact Jacobian from
+``jax.jacfwd`` and a backtracking line search that keeps the film open (h > 0).  From an ambient, centred start
+the gravity and the extra load are switched on gradually (a homotopy in the load), which makes the solve robust
+down to the speeds and up to the loads where the film nearly closes.  The Jacobian's eigenvalues at the solution
+give the linear stability of the equilibrium.
+
+Loads: ``w`` is the extra vertical *specific* load per bearing over ambient pressure, ``W / (p0 L D)`` [-], added
+to gravity (paper Fig. 4).  In the equations of motion it enters as ``w_ext = W / (p0 R L) = 2 w``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from .model import balanced_vector_field, film, layout
+from .params import ParameterError, Params, SystemSpec
+
+__all__ = ["StaticResult", "NewtonResult", "newton_solve", "solve_equilibrium", "load_displacement",
+           "with_load"]
+
+# Backtracking fractions of the Newton step, tried together (one vmapped evaluation).
+_STEP_FRACTIONS = jnp.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64])
+
+
+class NewtonResult(eqx.Module):
+    """Outcome of :func:`newton_solve` (arrays, so that it can be vmapped).
+
+    ``status``: 0 converged, 1 reached ``max_iter``, 2 the film closed or the residual became non-finite."""
+
+    x: Array
+    residual: Array
+    step: Array
+    iterations: Array
+    status: Array
+    h_min: Array
+
+
+def with_load(params: Params, w: float | Array, scale: float | Array = 1.0) -> Params:
+    """Params with the extra specific load ``w = W/(p0 L D)`` and gravity both multiplied by ``scale``."""
+    return eqx.tree_at(lambda p: (p.w_ext, p.sigma), params,
+                       (2.0 * jnp.asarray(w) * scale, params.sigma * scale))
+
+
+def _h_min(s: Array, params: Params) -> Array:
+    return jnp.min(film(s, params))
+
+
+@eqx.filter_jit
+def newton_solve(s0: Array, omega: Array, params: Params, *, xtol: float = 1e-10, max_iter: int = 30
+                 ) -> NewtonResult:
+    """Damped Newton on the balanced vector field ``f(s, omega) = 0`` from ``s0``.
+
+    Each iteration solves ``J ds = -f`` with ``J = jax.jacfwd(f)`` and takes the largest step fraction in
+    ``{1, 1/2, ..., 1/64}`` that keeps the film open and decreases ``|f|_2`` (else the smallest).  Converged when a
+    full step has ``|ds|_inf < xtol``.  Pure and jit-compiled; ``jax.vmap`` batches it over guesses, speeds or
+    parameters.
+    """
+    f = lambda s: balanced_vector_field(s, omega, params)  # noqa: E731
+
+    def trial(s, ds, t):
+        s1 = s + t * ds
+        r1 = f(s1)
+        ok = jnp.all(jnp.isfinite(r1)) & (_h_min(s1, params) > 0.0)
+        return s1, jnp.where(ok, jnp.linalg.norm(r1), jnp.inf)
+
+    def body(carry):
+        s, _, _, k, _ = carry
+        r = f(s)
+        J = jax.jacfwd(f)(s)
+        ds = jnp.linalg.solve(J, -r)
+        s_try, n_try = jax.vmap(trial, in_axes=(None, None, 0))(s, ds, _STEP_FRACTIONS)
+        good = n_try < jnp.linalg.norm(r) * (1.0 - 1e-4 * _STEP_FRACTIONS)
+        idx = jnp.where(jnp.any(good), jnp.argmax(good), len(_STEP_FRACTIONS) - 1)
+        finite = jnp.isfinite(n_try[idx])
+        s_new = jnp.where(finite, s_try[idx], s)
+        step = jnp.max(jnp.abs(ds)) * _STEP_FRACTIONS[idx]
+        status = jnp.where(finite, jnp.where((idx == 0) & (step < xtol), 0, 1), 2)
+        return s_new, n_try[idx], step, k + 1, status
+
+    def cond(carry):
+        _, _, _, k, status = carry
+        return (status == 1) & (k < max_iter)
+
+    init = (s0, jnp.linalg.norm(f(s0)), jnp.inf, jnp.asarray(0), jnp.asarray(1))
+    s, res, step, k, status = jax.lax.while_loop(cond, body, init)
+    return NewtonResult(s, res, step, k, status, _h_min(s, params))
+
+
+@dataclass
+class StaticResult:
+    """A static equilibrium of the balanced system at one speed and load (dimensionless unless stated).
+
+    Attributes:
+        omega: speed Omega_bar.
+        w: extra specific load ``W/(p0 L D)`` per bearing.
+        outcome: ``"converged"``, ``"contact"`` (no equilibrium with an open film: the journal would touch the foil
+            before carrying the load) or ``"no_convergence"``.
+        message: a sentence on the outcome.
+        load_fraction: fraction of the (gravity + extra) load carried by the last converged state (1 if converged).
+        state: core state vector of the last converged equilibrium.
+        x_j, y_j: journal centre over clearance c (y up).
+        eccentricity: ``sqrt(x_j^2 + y_j^2)``.
+        attitude_deg: angle from the load line (straight down) to the journal's displacement, in the direction of
+            rotation [deg].
+        h_min: minimum film thickness over c.
+        theta: circumferential nodes [rad], foil ends included.
+        z: axial nodes over L (edge 0 .. mid-plane 1/2).
+        pressure: p/p0 on all nodes, shape (len(theta), len(z)).
+        foil: strip deflection q/c at the nodes (0 at the clamped ends).
+        eigenvalues: eigenvalues of the Jacobian (per unit tau), sorted by decreasing real part.
+        residual: 2-norm of f at the solution; iterations: Newton iterations in total.
+    """
+
+    omega: float
+    w: float
+    outcome: str
+    message: str
+    load_fraction: float
+    state: np.ndarray
+    x_j: float
+    y_j: float
+    eccentricity: float
+    attitude_deg: float
+    h_min: float
+    theta: np.ndarray
+    z: np.ndarray
+    pressure: np.ndarray
+    foil: np.ndarray
+    eigenvalues: np.ndarray
+    residual: float
+    iterations: int
+
+    @property
+    def converged(self) -> bool:
+        return self.outcome == "converged"
+
+    @property
+    def critical_eigenvalue(self) -> complex:
+        """Eigenvalue with the largest real part."""
+        return complex(self.eigenvalues[0]) if self.eigenvalues.size else complex("nan")
+
+    @property
+    def stable(self) -> bool:
+        """Linearly stable: every eigenvalue of the Jacobian has a negative real part."""
+        return bool(self.eigenvalues.size) and float(self.eigenvalues[0].real) < 0.0
+
+    def midplane_pressure(self) -> np.ndarray:
+        """p/p0 along theta at the bearing's mid-plane."""
+        return self.pressure[:, -1]
+
+    def summary(self, spec: SystemSpec | None = None) -> dict[str, Any]:
+        """JSON-ready summary; with ``spec`` also SI values (um, N, rpm, Hz)."""
+        lam = self.critical_eigenvalue
+        d: dict[str, Any] = {
+            "omega_bar": self.omega, "w_specific": self.w, "outcome": self.outcome, "message": self.message,
+            "load_fraction": self.load_fraction, "x_j": self.x_j, "y_j": self.y_j,
+            "eccentricity": self.eccentricity, "attitude_deg": self.attitude_deg, "h_min": self.h_min,
+            "p_max": float(self.pressure.max()), "q_max": float(self.foil.max()),
+            "critical_eigenvalue": [lam.real, lam.imag], "stable": self.stable,
+            "residual": self.residual, "iterations": self.iterations, "n_states": int(self.state.size),
+        }
+        if spec is not None:
+            c_um = spec.c * 1e6
+            d["SI"] = {
+                "speed_rpm": spec.rpm(self.omega),
+                "extra_load_N": self.w * spec.p0 * spec.L * 2 * spec.R,
+                "total_load_N": spec.bearing_weight + self.w * spec.p0 * spec.L * 2 * spec.R,
+                "x_j_um": self.x_j * c_um, "y_j_um": self.y_j * c_um, "h_min_um": self.h_min * c_um,
+                "p_max_Pa": float(self.pressure.max()) * spec.p0,
+                "critical_eigenvalue_per_s": [lam.real / spec.t_star, lam.imag / spec.t_star],
+                "critical_frequency_Hz": abs(lam.imag) / spec.t_star / (2 * math.pi),
+            }
+        return d
+
+
+def _check_inputs(omega: float, w: float) -> None:
+    if not (isinstance(omega, (int, float)) and math.isfinite(omega) and 0.0 < omega <= 50.0):
+        raise ParameterError(f"omega = {omega!r} is outside the allowed range (0, 50] (dimensionless speed)")
+    if not (isinstance(w, (int, float)) and math.isfinite(w) and 0.0 <= w <= 20.0):
+        raise ParameterError(f"w = {w!r} is outside the allowed range [0, 20] (specific load W/(p0 L D))")
+
+
+def _build_result(s: Array, omega: float, w: float, params: Params, outcome: str, message: str,
+                  fraction: float, residual: float, iterations: int) -> StaticResult:
+    lay = layout(params)
+    grid = lay.grid
+    s_np = np.asarray(s)
+    J = np.asarray(jax.jacfwd(balanced_vector_field)(s, omega, params))
+    ev = np.linalg.eigvals(J)
+    ev = ev[np.argsort(-ev.real)]
+    xj, yj = (float(v) for v in np.asarray(lay.journal(s)))
+    h = np.asarray(film(s, params))
+    pressure = np.asarray(grid.full_field(lay.pressures(s)))
+    foil = np.pad(np.asarray(lay.foil_deflection(s)), 1)
+    z = np.concatenate([[0.0], np.asarray(grid.z())])
+    attitude = math.degrees(math.atan2(yj, xj) + math.pi / 2)
+    attitude = (attitude + 180.0) % 360.0 - 180.0
+    return StaticResult(
+        omega=float(omega), w=float(w), outcome=outcome, message=message, load_fraction=float(fraction),
+        state=s_np, x_j=xj, y_j=yj, eccentricity=math.hypot(xj, yj), attitude_deg=attitude,
+        h_min=float(h.min()), theta=np.asarray(grid.theta_nodes(params.theta0)), z=z, pressure=pressure,
+        foil=foil, eigenvalues=ev, residual=float(residual), iterations=int(iterations))
+
+
+def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Array | None = None,
+                      xtol: float = 1e-10, min_fraction_step: float = 1e-4,
+                      contact_h: float = 0.05) -> StaticResult:
+    """Static equilibrium of the balanced system at speed ``omega`` under gravity plus the specific load ``w``.
+
+    Args:
+        params: dimensionless system (``SystemSpec.nondim()``).
+        omega: speed Omega_bar in (0, 50].
+        w: extra vertical specific load per bearing ``W/(p0 L D)`` in [0, 20].
+        guess: a core state to start Newton from (e.g. the equilibrium at a nearby speed or load).  Without it,
+            or if Newton fails from it, the load is ramped from zero (homotopy) with an adaptive step.
+        xtol: Newton step tolerance (infinity norm, dimensionless states).
+        min_fraction_step: smallest load-fraction increment before the ramp gives up.
+        contact_h: when the ramp gives up with ``h_min`` below this, the outcome is ``"contact"``.
+
+    Returns:
+        A :class:`StaticResult`; never NaN: a film that closes before the load is carried gives
+        ``outcome == "contact"`` and the last converged (partially loaded) state.
+    """
+    _check_inputs(omega, w)
+    omega_a = jnp.asarray(float(omega))
+    iters = 0
+    if guess is not None:
+        res = newton_solve(jnp.asarray(guess), omega_a, with_load(params, w), xtol=xtol)
+        iters += int(res.iterations)
+        if int(res.status) == 0:
+            return _build_result(res.x, omega, w, params, "converged", "Newton converged from the given guess",
+                                 1.0, float(res.residual), iters)
+    from .model import initial_state
+
+    s = initial_state(with_load(params, w, 0.0))
+    frac, dfrac = 0.0, 1.0
+    last_res = 0.0
+    while frac < 1.0:
+        target = min(1.0, frac + dfrac)
+        res = newton_solve(s, omega_a, with_load(params, w, target), xtol=xtol)
+        iters += int(res.iterations)
+        if int(res.status) == 0:
+            s, frac, last_res = res.x, target, float(res.residual)
+            dfrac = min(2.0 * dfrac, 1.0)
+            continue
+        dfrac *= 0.5
+        if dfrac < min_fraction_step:
+            h_last = float(_h_min(s, with_load(params, w, frac)))
+            p_last = with_load(params, w, frac)
+            if h_last < contact_h:
+                msg = (f"the film closes: h_min = {h_last:.3g} c at {100 * frac:.2f}% of the load; the bearing "
+                       "cannot carry the full load at this speed")
+                outcome = "contact"
+            else:
+                msg = f"Newton failed beyond {100 * frac:.2f}% of the load (h_min = {h_last:.3g} c)"
+                outcome = "no_convergence"
+            r = _build_result(s, omega, w, p_last, outcome, msg, frac, last_res, iters)
+            return r
+    return _build_result(s, omega, w, params, "converged", "converged by load ramp", 1.0, last_res, iters)
+
+
+def load_displacement(params: Params, omega: float, loads: Sequence[float],
+                      progress: Callable[[int, int], None] | None = None) -> list[StaticResult]:
+    """Equilibria for increasing specific loads ``loads`` (paper Fig. 4/5), each warm-started from the previous.
+
+    Stops at the first load the bearing cannot carry (its result, with ``outcome == "contact"``, is the last
+    entry), so the finished part is always returned.
+    """
+    out: list[StaticResult] = []
+    guess = None
+    for k, w in enumerate(loads):
+        r = solve_equilibrium(params, omega, float(w), guess=guess)
+        out.append(r)
+        if progress is not None:
+            progress(k + 1, len(loads))
+        if not r.converged:
+            break
+        guess = r.state
+    return out
