@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import equinox as eqx
+import jax.numpy as jnp
 
 __all__ = [
     "SystemSpec",
@@ -150,8 +151,8 @@ class SystemSpec:
     rotor: str = "jeffcott"
     theta0: float = math.pi / 2
     load: float = 0.0
-    Nx: int = 40
-    Nz: int = 6
+    Nx: int = 48
+    Nz: int = 8
     gumbel_width: float = 0.0
 
     def __post_init__(self) -> None:
@@ -228,17 +229,18 @@ class SystemSpec:
         ts = self.t_star
         m_j = self.m_j
         jeff = self.rotor == "jeffcott"
+        f = lambda v: jnp.asarray(float(v), dtype=jnp.float64)  # noqa: E731  (traced, not static, under jit)
         return Params(
-            kappa=self.R / self.L,
-            zeta=self.p0 * self.R * self.L * ts**2 / (m_j * self.c),
-            sigma=self.g * ts**2 / self.c,
-            k_s=self.k_s_bar if jeff else 0.0,
-            mass_ratio=self.m_d / (2.0 * m_j) if jeff else 0.0,
-            alpha_f=self.alpha_f,
-            eta=self.eta,
-            eps=self.eccentricity_u / self.c,
-            w_ext=self.load / self.force_scale,
-            theta0=self.theta0,
+            kappa=f(self.R / self.L),
+            zeta=f(self.p0 * self.R * self.L * ts**2 / (m_j * self.c)),
+            sigma=f(self.g * ts**2 / self.c),
+            k_s=f(self.k_s_bar if jeff else 0.0),
+            mass_ratio=f(self.m_d / (2.0 * m_j) if jeff else 0.0),
+            alpha_f=f(self.alpha_f),
+            eta=f(self.eta),
+            eps=f(self.eccentricity_u / self.c),
+            w_ext=f(self.load / self.force_scale),
+            theta0=f(self.theta0),
             Nx=self.Nx,
             Nz=self.Nz,
             rotor=self.rotor,
@@ -259,19 +261,20 @@ class Params(eqx.Module):
     stiffness ``k_s_bar``; ``mass_ratio = m_d / (2 m_j)`` (Eq. 12a); ``alpha_f`` foil compliance; ``eta`` foil
     loss factor; ``eps = e_u / c`` unbalance; ``w_ext`` extra vertical load per bearing over ``p0 R L``;
     ``theta0`` foil fixed end [rad].  Static fields (part of the tree structure; changing them recompiles):
-    grid ``Nx``, ``Nz``, ``rotor`` kind and ``gumbel_width``.
+    grid ``Nx``, ``Nz``, ``rotor`` kind and ``gumbel_width``.  ``SystemSpec.nondim`` stores the floats
+    as 0-d float64 arrays so that ``equinox.filter_jit`` traces them (no recompilation when a value changes).
     """
 
-    kappa: float
-    zeta: float
-    sigma: float
-    k_s: float
-    mass_ratio: float
-    alpha_f: float
-    eta: float
-    eps: float
-    w_ext: float
-    theta0: float
+    kappa: Any
+    zeta: Any
+    sigma: Any
+    k_s: Any
+    mass_ratio: Any
+    alpha_f: Any
+    eta: Any
+    eps: Any
+    w_ext: Any
+    theta0: Any
     Nx: int = eqx.field(static=True)
     Nz: int = eqx.field(static=True)
     rotor: str = eqx.field(static=True, default="jeffcott")

@@ -50,7 +50,15 @@ class NewtonResult(eqx.Module):
 def with_load(params: Params, w: float | Array, scale: float | Array = 1.0) -> Params:
     """Params with the extra specific load ``w = W/(p0 L D)`` and gravity both multiplied by ``scale``."""
     return eqx.tree_at(lambda p: (p.w_ext, p.sigma), params,
-                       (2.0 * jnp.asarray(w) * scale, params.sigma * scale))
+                       (2.0 * jnp.asarray(w, jnp.float64) * scale, jnp.asarray(params.sigma * scale, jnp.float64)))
+
+
+_jacobian = eqx.filter_jit(jax.jacfwd(balanced_vector_field))
+
+
+def _as_arrays(params: Params) -> Params:
+    """Float leaves as float64 arrays, so that ``filter_jit`` traces rather than bakes them in."""
+    return jax.tree_util.tree_map(lambda v: jnp.asarray(v, jnp.float64), params)
 
 
 def _h_min(s: Array, params: Params) -> Array:
@@ -58,42 +66,46 @@ def _h_min(s: Array, params: Params) -> Array:
 
 
 @eqx.filter_jit
-def newton_solve(s0: Array, omega: Array, params: Params, *, xtol: float = 1e-10, max_iter: int = 30
+def newton_solve(s0: Array, omega: Array, params: Params, *, xtol: float = 1e-10, max_iter: int = 25
                  ) -> NewtonResult:
     """Damped Newton on the balanced vector field ``f(s, omega) = 0`` from ``s0``.
 
-    Each iteration solves ``J ds = -f`` with ``J = jax.jacfwd(f)`` and takes the largest step fraction in
-    ``{1, 1/2, ..., 1/64}`` that keeps the film open and decreases ``|f|_2`` (else the smallest).  Converged when a
-    full step has ``|ds|_inf < xtol``.  Pure and jit-compiled; ``jax.vmap`` batches it over guesses, speeds or
-    parameters.
+    Each iteration solves ``J ds = -f`` with ``J = jax.jacfwd(f)`` and takes the largest step fraction t in
+    ``{1, 1/2, ..., 1/64}`` that keeps the film open and passes Deuflhard's affine-invariant monotonicity test
+    ``|J^-1 f(s + t ds)| <= (1 - t/4) |ds|`` (the simplified Newton correction shrinks; one LU serves all trial
+    steps).  The test is blind to the very different scales of pressure, foil and rotor residuals, where a plain
+    ``|f|`` line search crawls.  Converged when a full step has ``|ds|_inf < xtol``.  Pure and jit-compiled:
+    ``jax.vmap`` batches it over guesses, speeds or parameters.
     """
     f = lambda s: balanced_vector_field(s, omega, params)  # noqa: E731
 
-    def trial(s, ds, t):
+    def trial(s, ds, t, lu):
         s1 = s + t * ds
         r1 = f(s1)
         ok = jnp.all(jnp.isfinite(r1)) & (_h_min(s1, params) > 0.0)
-        return s1, jnp.where(ok, jnp.linalg.norm(r1), jnp.inf)
+        dsb = jax.scipy.linalg.lu_solve(lu, -r1)
+        return s1, jnp.where(ok, jnp.linalg.norm(dsb), jnp.inf), jnp.linalg.norm(r1)
 
     def body(carry):
         s, _, _, k, _ = carry
         r = f(s)
-        J = jax.jacfwd(f)(s)
-        ds = jnp.linalg.solve(J, -r)
-        s_try, n_try = jax.vmap(trial, in_axes=(None, None, 0))(s, ds, _STEP_FRACTIONS)
-        good = n_try < jnp.linalg.norm(r) * (1.0 - 1e-4 * _STEP_FRACTIONS)
+        lu = jax.scipy.linalg.lu_factor(jax.jacfwd(f)(s))
+        ds = jax.scipy.linalg.lu_solve(lu, -r)
+        nds = jnp.linalg.norm(ds)
+        s_try, n_bar, r_norm = jax.vmap(trial, in_axes=(None, None, 0, None))(s, ds, _STEP_FRACTIONS, lu)
+        good = n_bar <= (1.0 - 0.25 * _STEP_FRACTIONS) * nds
         idx = jnp.where(jnp.any(good), jnp.argmax(good), len(_STEP_FRACTIONS) - 1)
-        finite = jnp.isfinite(n_try[idx])
+        finite = jnp.isfinite(n_bar[idx])
         s_new = jnp.where(finite, s_try[idx], s)
         step = jnp.max(jnp.abs(ds)) * _STEP_FRACTIONS[idx]
         status = jnp.where(finite, jnp.where((idx == 0) & (step < xtol), 0, 1), 2)
-        return s_new, n_try[idx], step, k + 1, status
+        return s_new, r_norm[idx], step, k + 1, status
 
     def cond(carry):
         _, _, _, k, status = carry
         return (status == 1) & (k < max_iter)
 
-    init = (s0, jnp.linalg.norm(f(s0)), jnp.inf, jnp.asarray(0), jnp.asarray(1))
+    init = (s0, jnp.linalg.norm(f(s0)), jnp.asarray(jnp.inf), jnp.asarray(0), jnp.asarray(1))
     s, res, step, k, status = jax.lax.while_loop(cond, body, init)
     return NewtonResult(s, res, step, k, status, _h_min(s, params))
 
@@ -197,7 +209,7 @@ def _build_result(s: Array, omega: float, w: float, params: Params, outcome: str
     lay = layout(params)
     grid = lay.grid
     s_np = np.asarray(s)
-    J = np.asarray(jax.jacfwd(balanced_vector_field)(s, omega, params))
+    J = np.asarray(_jacobian(s, jnp.asarray(float(omega)), params))
     ev = np.linalg.eigvals(J)
     ev = ev[np.argsort(-ev.real)]
     xj, yj = (float(v) for v in np.asarray(lay.journal(s)))
@@ -214,8 +226,33 @@ def _build_result(s: Array, omega: float, w: float, params: Params, outcome: str
         foil=foil, eigenvalues=ev, residual=float(residual), iterations=int(iterations))
 
 
+def _ramp(s: Array, params_at: Callable[[float], Params], omega: Array, xtol: float, min_step: float,
+          first_step: float) -> tuple[Array, float, float, int]:
+    """Follow equilibria from ``params_at(0)`` (solved by ``s``) to ``params_at(1)`` with an adaptive step and a
+    secant predictor.  Returns the last converged state, the fraction reached, its residual and the iterations."""
+    t, dt = 0.0, first_step
+    s_prev, t_prev = None, 0.0
+    res_norm, iters = 0.0, 0
+    while t < 1.0 and dt >= min_step:
+        target = min(1.0, t + dt)
+        guess = s
+        if s_prev is not None:  # secant predictor along the load path
+            cand = s + (s - s_prev) * ((target - t) / (t - t_prev))
+            if float(_h_min(cand, params_at(target))) > 0.0:
+                guess = cand
+        res = newton_solve(guess, omega, params_at(target), xtol=xtol)
+        iters += int(res.iterations)
+        if int(res.status) == 0:
+            s_prev, t_prev = s, t
+            s, t, res_norm = res.x, target, float(res.residual)
+            dt = 2.0 * dt
+        else:
+            dt *= 0.5
+    return s, t, res_norm, iters
+
+
 def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Array | None = None,
-                      xtol: float = 1e-10, min_fraction_step: float = 1e-4,
+                      guess_w: float | None = None, xtol: float = 1e-10, min_fraction_step: float = 1e-4,
                       contact_h: float = 0.05) -> StaticResult:
     """Static equilibrium of the balanced system at speed ``omega`` under gravity plus the specific load ``w``.
 
@@ -223,8 +260,10 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         params: dimensionless system (``SystemSpec.nondim()``).
         omega: speed Omega_bar in (0, 50].
         w: extra vertical specific load per bearing ``W/(p0 L D)`` in [0, 20].
-        guess: a core state to start Newton from (e.g. the equilibrium at a nearby speed or load).  Without it,
-            or if Newton fails from it, the load is ramped from zero (homotopy) with an adaptive step.
+        guess: a core state to start from, e.g. the equilibrium at a nearby speed, or at the load ``guess_w``.
+        guess_w: the load at which ``guess`` is an equilibrium; the load is then ramped from ``guess_w`` to ``w``.
+            Without ``guess``, or when the warm start fails, the load is ramped from zero from the centred,
+            ambient state (a homotopy in gravity + load with an adaptive step).
         xtol: Newton step tolerance (infinity norm, dimensionless states).
         min_fraction_step: smallest load-fraction increment before the ramp gives up.
         contact_h: when the ramp gives up with ``h_min`` below this, the outcome is ``"contact"``.
@@ -234,41 +273,37 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         ``outcome == "contact"`` and the last converged (partially loaded) state.
     """
     _check_inputs(omega, w)
+    params = _as_arrays(params)
+    if guess_w is not None:
+        _check_inputs(omega, guess_w)
     omega_a = jnp.asarray(float(omega))
     iters = 0
     if guess is not None:
-        res = newton_solve(jnp.asarray(guess), omega_a, with_load(params, w), xtol=xtol)
-        iters += int(res.iterations)
-        if int(res.status) == 0:
-            return _build_result(res.x, omega, w, params, "converged", "Newton converged from the given guess",
-                                 1.0, float(res.residual), iters)
+        w0 = w if guess_w is None else guess_w
+        s, t, res_norm, it = _ramp(jnp.asarray(guess), lambda t: with_load(params, w0 + t * (w - w0)), omega_a,
+                                   xtol, min_fraction_step, first_step=1.0)
+        iters += it
+        if t >= 1.0:
+            return _build_result(s, omega, w, params, "converged", "converged from the given guess", 1.0,
+                                 res_norm, iters)
     from .model import initial_state
 
-    s = initial_state(with_load(params, w, 0.0))
-    frac, dfrac = 0.0, 1.0
-    last_res = 0.0
-    while frac < 1.0:
-        target = min(1.0, frac + dfrac)
-        res = newton_solve(s, omega_a, with_load(params, w, target), xtol=xtol)
-        iters += int(res.iterations)
-        if int(res.status) == 0:
-            s, frac, last_res = res.x, target, float(res.residual)
-            dfrac = min(2.0 * dfrac, 1.0)
-            continue
-        dfrac *= 0.5
-        if dfrac < min_fraction_step:
-            h_last = float(_h_min(s, with_load(params, w, frac)))
-            p_last = with_load(params, w, frac)
-            if h_last < contact_h:
-                msg = (f"the film closes: h_min = {h_last:.3g} c at {100 * frac:.2f}% of the load; the bearing "
-                       "cannot carry the full load at this speed")
-                outcome = "contact"
-            else:
-                msg = f"Newton failed beyond {100 * frac:.2f}% of the load (h_min = {h_last:.3g} c)"
-                outcome = "no_convergence"
-            r = _build_result(s, omega, w, p_last, outcome, msg, frac, last_res, iters)
-            return r
-    return _build_result(s, omega, w, params, "converged", "converged by load ramp", 1.0, last_res, iters)
+    s0 = initial_state(with_load(params, w, 0.0))
+    s, frac, res_norm, it = _ramp(s0, lambda t: with_load(params, w, t), omega_a, xtol, min_fraction_step,
+                                  first_step=0.25)
+    iters += it
+    if frac >= 1.0:
+        return _build_result(s, omega, w, params, "converged", "converged by load ramp", 1.0, res_norm, iters)
+    p_last = with_load(params, w, frac)
+    h_last = float(_h_min(s, p_last))
+    if h_last < contact_h:
+        msg = (f"the film closes: h_min = {h_last:.3g} c at {100 * frac:.2f}% of the load; the bearing cannot "
+               "carry the full load at this speed")
+        outcome = "contact"
+    else:
+        msg = f"Newton failed beyond {100 * frac:.2f}% of the load (h_min = {h_last:.3g} c)"
+        outcome = "no_convergence"
+    return _build_result(s, omega, w, p_last, outcome, msg, frac, res_norm, iters)
 
 
 def load_displacement(params: Params, omega: float, loads: Sequence[float],
@@ -279,13 +314,13 @@ def load_displacement(params: Params, omega: float, loads: Sequence[float],
     entry), so the finished part is always returned.
     """
     out: list[StaticResult] = []
-    guess = None
+    guess, w_prev = None, None
     for k, w in enumerate(loads):
-        r = solve_equilibrium(params, omega, float(w), guess=guess)
+        r = solve_equilibrium(params, omega, float(w), guess=guess, guess_w=w_prev)
         out.append(r)
         if progress is not None:
             progress(k + 1, len(loads))
         if not r.converged:
             break
-        guess = r.state
+        guess, w_prev = r.state, float(w)
     return out

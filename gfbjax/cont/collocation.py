@@ -378,7 +378,7 @@ class Condensed(NamedTuple):
 def condense(blocks: Blocks, c: jax.Array) -> Condensed:
     """Condensation of parameters (paper Eq. (45)-(46)), batched over intervals.
 
-    ``c``: right-hand side of the collocation rows, shape (N, mn).
+    ``c``: right-hand sides of the collocation rows, shape (N, mn, k).
     """
     AL, AI, AR, Bp = blocks
     k = AI.shape[-1]  # (m-1) n
@@ -387,11 +387,19 @@ def condense(blocks: Blocks, c: jax.Array) -> Condensed:
     Qt = jnp.swapaxes(Q, -1, -2)
     Q1t, Q2t = Qt[:, :k], Qt[:, k:]
     solve = jax.vmap(lambda R_, B_: solve_triangular(R_, B_, lower=False))
-    w0 = solve(R1, jnp.einsum("jab,jb->ja", Q1t, c)[..., None])[..., 0]
+    w0 = solve(R1, Q1t @ c)
     WL = -solve(R1, Q1t @ AL)
     WR = -solve(R1, Q1t @ AR)
     Wp = -solve(R1, Q1t @ Bp)
-    return Condensed(Q2t @ AL, Q2t @ AR, Q2t @ Bp, jnp.einsum("jab,jb->ja", Q2t, c), w0, WL, WR, Wp)
+    return Condensed(Q2t @ AL, Q2t @ AR, Q2t @ Bp, Q2t @ c, w0, WL, WR, Wp)
+
+
+def _dot2(A: jax.Array, b: jax.Array) -> jax.Array:
+    """A @ b for a contraction over the 2 parameters (T, lam), written elementwise.
+
+    Works around an XLA:CPU hang (jax 0.10) observed for the broadcast dot
+    (N, k, 2) @ (2, 2) inside this program."""
+    return A[..., :, 0:1] * b[0] + A[..., :, 1:2] * b[1]
 
 
 def _solve_reduced(cond: Condensed, Phi: jax.Array, phip: jax.Array, fb: jax.Array, cper: jax.Array):
@@ -400,6 +408,7 @@ def _solve_reduced(cond: Condensed, Phi: jax.Array, phip: jax.Array, fb: jax.Arr
     Rows:  C_j dx_j + D_j dx_{j+1} + G_j dp = cc_j  (j=0..N-1);
            dx_0 - dx_N = cper;   sum_j Phi_j dx_j + phip dp = fb  (2 rows).
     Sequential block-QR elimination of dx_1..dx_{N-1} with ``lax.scan``.
+    Right-hand sides carry a trailing axis k (several systems at once).
     """
     C, D, G, cc = cond.C, cond.D, cond.G, cond.cc
     n = C.shape[-1]
@@ -429,12 +438,12 @@ def _solve_reduced(cond: Condensed, Phi: jax.Array, phip: jax.Array, fb: jax.Arr
     top = jnp.concatenate([A0, AN, Ap], axis=1)
     mid = jnp.concatenate([eye, -eye, jnp.zeros((n, 2), C.dtype)], axis=1)
     bot = jnp.concatenate([F0, FN, Fp], axis=1)
-    z = jnp.linalg.solve(jnp.concatenate([top, mid, bot], axis=0), jnp.concatenate([b, cper, fbb]))
+    z = jnp.linalg.solve(jnp.concatenate([top, mid, bot], axis=0), jnp.concatenate([b, cper, fbb], axis=0))
     dx0, dxN, dp = z[:n], z[n:2 * n], z[2 * n:]
 
     def back(dxnext, pv):
         Rt, P0, P1, Pp, pb = pv
-        dxj = solve_triangular(Rt, pb - P0 @ dx0 - P1 @ dxnext - Pp @ dp, lower=False)
+        dxj = solve_triangular(Rt, pb - P0 @ dx0 - P1 @ dxnext - _dot2(Pp, dp), lower=False)
         return dxj, dxj
 
     _, dxs = jax.lax.scan(back, dxN, piv, reverse=True)
@@ -442,12 +451,17 @@ def _solve_reduced(cond: Condensed, Phi: jax.Array, phip: jax.Array, fb: jax.Arr
     return dxm, dp
 
 
-def linear_solve(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme,
-                 rc: jax.Array, rper: jax.Array, rs: jax.Array) -> Orbit:
-    """Solve  J delta = (rc, rper, rs)  with J the Jacobian of ``residual``; condensed path."""
+def linear_solve_multi(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme,
+                       rc: jax.Array, rper: jax.Array, rs: jax.Array):
+    """Solve  J delta = (rc, rper, rs)  for k right-hand sides at once (condensed path).
+
+    rc (N, m, n, k), rper (n, k), rs (2, k).  Returns mesh (N+1, n, k),
+    interior (N, m-1, n, k) and (T, lam) (2, k) components of the solutions.
+    """
     N, m, n = orbit.N, scheme.m, orbit.n
+    k = rc.shape[-1]
     blocks = collocation_blocks(f, args, orbit, scheme)
-    cond = condense(blocks, rc.reshape(N, m * n))
+    cond = condense(blocks, rc.reshape(N, m * n, k))
     coef, cp, _ = _functional_coeffs(orbit, con, scheme)  # (2, N, m+1, n)
     aL = jnp.moveaxis(coef[:, :, 0], 0, 1)  # (N, 2, n)
     aI = jnp.moveaxis(coef[:, :, 1:m].reshape(2, N, (m - 1) * n), 0, 1)
@@ -455,19 +469,26 @@ def linear_solve(f: VectorField, args: Any, orbit: Orbit, con: Constraint, schem
     phiL = aL + aI @ cond.WL
     phiR = aR + aI @ cond.WR
     phip = cp + jnp.sum(aI @ cond.Wp, axis=0)
-    fb = rs - jnp.einsum("jab,jb->a", aI, cond.w0)
+    fb = rs - jnp.einsum("jab,jbk->ak", aI, cond.w0)
     Phi = jnp.zeros((N + 1, 2, n), orbit.xm.dtype).at[:-1].add(phiL).at[1:].add(phiR)
     dxm, dp = _solve_reduced(cond, Phi, phip, fb, rper)
-    dw = (cond.w0 + jnp.einsum("jab,jb->ja", cond.WL, dxm[:-1])
-          + jnp.einsum("jab,jb->ja", cond.WR, dxm[1:]) + cond.Wp @ dp)
-    return Orbit(orbit.mesh, dxm, dw.reshape(N, m - 1, n), dp[0], dp[1])
+    dw = (cond.w0 + jnp.einsum("jab,jbk->jak", cond.WL, dxm[:-1])
+          + jnp.einsum("jab,jbk->jak", cond.WR, dxm[1:]) + _dot2(cond.Wp, dp))
+    return dxm, dw.reshape(N, m - 1, n, k), dp
+
+
+def linear_solve(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme,
+                 rc: jax.Array, rper: jax.Array, rs: jax.Array) -> Orbit:
+    """Solve  J delta = (rc, rper, rs)  with J the Jacobian of ``residual``; condensed path."""
+    dxm, dw, dp = linear_solve_multi(f, args, orbit, con, scheme, rc[..., None], rper[:, None], rs[:, None])
+    return Orbit(orbit.mesh, dxm[..., 0], dw[..., 0], dp[0, 0], dp[1, 0])
 
 
 def transfer_blocks(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme) -> tuple[jax.Array, jax.Array]:
     """Condensed blocks (C_j, D_j) at ``orbit``; Gamma_j = -D_j^{-1} C_j."""
     N, m, n = orbit.N, scheme.m, orbit.n
     blocks = collocation_blocks(f, args, orbit, scheme)
-    cond = condense(blocks, jnp.zeros((N, m * n), orbit.xm.dtype))
+    cond = condense(blocks, jnp.zeros((N, m * n, 1), orbit.xm.dtype))
     return cond.C, cond.D
 
 
@@ -481,7 +502,7 @@ def interior_response(f: VectorField, args: Any, orbit: Orbit, scheme: Scheme, d
     """Interior values of the linearised (homogeneous) solution with mesh values dxm."""
     N, m, n = orbit.N, scheme.m, orbit.n
     blocks = collocation_blocks(f, args, orbit, scheme)
-    cond = condense(blocks, jnp.zeros((N, m * n), orbit.xm.dtype))
+    cond = condense(blocks, jnp.zeros((N, m * n, 1), orbit.xm.dtype))
     dw = jnp.einsum("jab,jb->ja", cond.WL, dxm[:-1]) + jnp.einsum("jab,jb->ja", cond.WR, dxm[1:])
     return dw.reshape(N, m - 1, n)
 
@@ -511,38 +532,37 @@ def dense_newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, 
 # Newton corrector
 # --------------------------------------------------------------------------
 @partial(jax.jit, static_argnums=(0, 4))
-def _newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
+def _step_and_tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
+    """Newton iterate, residual/step norms and the tangent at ``orbit``: one
+    linearisation, two right-hand sides (the only compiled kernel of Newton)."""
+    N, m, n = orbit.N, scheme.m, orbit.n
+    z = orbit.xm.dtype
     rc, rper, rs = residual(f, args, orbit, con, scheme)
     rnorm = jnp.maximum(jnp.max(jnp.abs(rc)), jnp.maximum(jnp.max(jnp.abs(rper)), jnp.max(jnp.abs(rs))))
-    d = linear_solve(f, args, orbit, con, scheme, -rc, -rper, -rs)
+    RC = jnp.stack([-rc, jnp.zeros((N, m, n), z)], axis=-1)
+    RP = jnp.stack([-rper, jnp.zeros((n,), z)], axis=-1)
+    RS = jnp.stack([-rs, jnp.array([0.0, 1.0], z)], axis=-1)
+    dxm, dw, dp = linear_solve_multi(f, args, orbit, con, scheme, RC, RP, RS)
+    d = Orbit(orbit.mesh, dxm[..., 0], dw[..., 0], dp[0, 0], dp[1, 0])
+    t = Orbit(orbit.mesh, dxm[..., 1], dw[..., 1], dp[0, 1], dp[1, 1])
+    t = t.scale(1.0 / jnp.sqrt(inner(t, t, scheme)))
     dnorm = jnp.max(jnp.abs(d.to_flat()))
-    return orbit + d, rnorm, dnorm
+    return orbit + d, rnorm, dnorm, t
 
 
 def newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
     """One condensed Newton step delta (not applied)."""
-    new, _, _ = _newton_step(f, args, orbit, con, scheme)
+    new, _, _, _ = _step_and_tangent(f, args, orbit, con, scheme)
     return Orbit(orbit.mesh, new.xm - orbit.xm, new.xi - orbit.xi, new.T - orbit.T, new.lam - orbit.lam)
 
 
-@partial(jax.jit, static_argnums=(0, 4))
-def _residual_norm(f, args, orbit, con, scheme):
-    rc, rper, rs = residual(f, args, orbit, con, scheme)
-    return jnp.maximum(jnp.max(jnp.abs(rc)), jnp.maximum(jnp.max(jnp.abs(rper)), jnp.max(jnp.abs(rs))))
-
-
-@partial(jax.jit, static_argnums=(0, 4))
 def tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
     """Tangent of the solution curve (paper Eq. (34)): J_aug tau = e_cont, normalised.
 
     The continuation row of ``con`` (previous tangent, or d/dlam for a fresh
     start) fixes the orientation: <tau, con.v> > 0.
     """
-    N, m, n = orbit.N, scheme.m, orbit.n
-    z = orbit.xm.dtype
-    t = linear_solve(f, args, orbit, con, scheme, jnp.zeros((N, m, n), z), jnp.zeros((n,), z),
-                     jnp.array([0.0, 1.0], z))
-    return t.scale(1.0 / jnp.sqrt(inner(t, t, scheme)))
+    return _step_and_tangent(f, args, orbit, con, scheme)[3]
 
 
 STATUS_CONVERGED = 0
@@ -555,7 +575,8 @@ _REASONS = {STATUS_CONVERGED: "converged", STATUS_MAXITER: "maximum Newton itera
 
 @dataclass(frozen=True)
 class NewtonResult:
-    """Outcome of a Newton correction.  ``orbit`` is the last finite iterate."""
+    """Outcome of a Newton correction.  ``orbit`` is the last finite iterate;
+    ``tangent`` the normalised tangent there (continuation row of the constraint)."""
 
     orbit: Orbit
     status: int
@@ -563,6 +584,7 @@ class NewtonResult:
     iterations: int
     residual_norm: float
     step_norm: float
+    tangent: Orbit | None = None
 
     @property
     def converged(self) -> bool:
@@ -572,22 +594,24 @@ class NewtonResult:
 def newton(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme, *,
            tol: float = 1e-10, rtol_step: float = 1e-10, max_iter: int = 12,
            divergence_factor: float = 1e3) -> NewtonResult:
-    """Newton corrector: converged when max|residual| <= tol and the last step
-    <= rtol_step * (1 + max|x|).  Never returns a non-finite orbit."""
-    res_hist = []
-    dn = np.inf
+    """Newton corrector.  Converged when the step is <= rtol_step * (1 + max|x|)
+    and the residual at the new iterate is <= tol (evaluated by one more
+    linearisation, which also yields the tangent).  Never returns a non-finite orbit."""
+    steps: list[float] = []
+    rn = dn = float("inf")
     for it in range(1, max_iter + 1):
-        new, rn, dn = _newton_step(f, args, orbit, con, scheme)
-        rn, dn = float(rn), float(dn)
-        if not (np.isfinite(rn) and np.isfinite(dn)) or not bool(jnp.all(jnp.isfinite(new.to_flat()))):
+        new, rn_j, dn_j, _ = _step_and_tangent(f, args, orbit, con, scheme)
+        rn, dn = float(rn_j), float(dn_j)
+        if not (np.isfinite(rn) and np.isfinite(dn)):
             return NewtonResult(orbit, STATUS_NONFINITE, _REASONS[STATUS_NONFINITE], it, rn, dn)
-        res_hist.append(dn)
-        if len(res_hist) >= 3 and dn > divergence_factor * min(res_hist[:-1]):
+        steps.append(dn)
+        if len(steps) >= 3 and dn > divergence_factor * min(steps[:-1]):
             return NewtonResult(orbit, STATUS_DIVERGED, _REASONS[STATUS_DIVERGED], it, rn, dn)
         orbit = new
-        scale = 1.0 + float(jnp.max(jnp.abs(orbit.xm)))
-        if dn <= rtol_step * scale:
-            rfin = float(_residual_norm(f, args, orbit, con, scheme))
-            if rfin <= tol or rfin <= rn:
-                return NewtonResult(orbit, STATUS_CONVERGED, _REASONS[STATUS_CONVERGED], it, rfin, dn)
+        if dn <= rtol_step * (1.0 + float(jnp.max(jnp.abs(orbit.xm)))):
+            _, rfin, _, tan = _step_and_tangent(f, args, orbit, con, scheme)
+            rfin = float(rfin)
+            if np.isfinite(rfin) and (rfin <= tol or rfin <= 10 * rn):
+                return NewtonResult(orbit, STATUS_CONVERGED, _REASONS[STATUS_CONVERGED], it, rfin, dn, tan)
+            rn = rfin
     return NewtonResult(orbit, STATUS_MAXITER, _REASONS[STATUS_MAXITER], max_iter, rn, dn)

@@ -1,0 +1,91 @@
+"""The ``gfbjax`` command line (also ``python -m gfbjax``).
+
+Subcommands live in :mod:`gfbjax.commands`, one module each with ``register(subparsers)``; they are discovered
+automatically.  Code elsewhere can add one with :func:`register_command` before calling :func:`main`.
+
+Exit status: what the command returns (0 success); 2 for invalid input (a one-line message naming the option or
+field, no traceback); 130 when interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any, Callable, Sequence
+
+__all__ = ["main", "build_parser", "register_command"]
+
+PROG = "gfbjax"
+
+_EXTRA: list[Callable[[Any], Any]] = []
+
+
+def register_command(register: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    """Add a subcommand defined outside :mod:`gfbjax.commands`; ``register(subparsers)`` adds its parser and sets
+    ``func=run`` with ``run(args) -> int``.  Usable as a decorator."""
+    if register not in _EXTRA:
+        _EXTRA.append(register)
+    return register
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``gfbjax static: error: argument --speed: ... (see gfbjax static --help)``."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
+    """The parser with every subcommand, and one warning line per command module that failed to import."""
+    from . import __version__
+    from .commands import discover
+
+    parser = _Parser(
+        prog=PROG,
+        description=("gfbjax: nonlinear dynamics of rotors on gas foil bearings in JAX (Papafragkos et al., "
+                     "Nonlinear Dynamics 2022): static equilibria, limit cycles, Floquet stability, energy flow "
+                     "and foil design.  Inputs are SI or the paper's dimensionless design values; speeds are "
+                     "Omega_bar = 6 mu Omega R^2/(p0 c^2).  Run 'gfbjax COMMAND --help' for a command's options."),
+        epilog="example: gfbjax static --curves   (quick look at the reference system, results in results/static/)",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", parser_class=_Parser)
+    mods, failed = discover()
+    for mod in mods:
+        mod.register(sub)
+    for reg in _EXTRA:
+        reg(sub)
+    warnings = [f"{PROG}: warning: command module gfbjax.commands.{name} failed to import "
+                f"({type(exc).__name__}: {exc})" for name, exc in failed]
+    return parser, warnings
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    from .params import ParameterError
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser, warnings = build_parser()
+    for line in warnings:
+        print(line, file=sys.stderr)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    func = getattr(args, "func", None)
+    if func is None:
+        parser.print_help()
+        return 0 if not argv else 2
+    prog = f"{PROG} {args.command}"
+    try:
+        return int(func(args) or 0)
+    except ParameterError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,236 @@
+"""Options and helpers shared by the ``gfbjax`` subcommands.
+
+Use in a command module::
+
+    from ._common import add_system_options, spec_from_args, output_dir, traced_params
+
+    def register(subparsers):
+        p = subparsers.add_parser("mycmd", help="...", description="...")
+        add_system_options(p, command="mycmd")
+        p.add_argument(...)
+        p.set_defaults(func=run)
+        return p
+
+    def run(args) -> int:
+        spec = spec_from_args(args)          # SystemSpec, checked; ParameterError names the bad field
+        params = traced_params(spec)         # Params with array leaves (no recompilation per value)
+        out = output_dir(args)               # pathlib.Path, created
+        ...
+        return 0
+
+Errors in the input are raised as :class:`gfbjax.ParameterError`; :func:`gfbjax.cli.main` turns them into a one-line
+message and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import types
+import typing
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..params import VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
+
+__all__ = [
+    "SYSTEM_NAMES",
+    "add_system_options",
+    "spec_from_args",
+    "parse_set",
+    "output_dir",
+    "traced_params",
+    "float_list",
+    "check_option",
+    "write_json",
+    "to_jsonable",
+]
+
+SYSTEM_NAMES = tuple(VARIATIONS) + ("validation10N", "validation15N")
+
+
+def _field_doc() -> str:
+    """Field names of SystemSpec with their type, for the --set help."""
+    hints = typing.get_type_hints(SystemSpec)
+    parts = []
+    for f in dataclasses.fields(SystemSpec):
+        t = hints[f.name]
+        name = getattr(t, "__name__", None) or str(t).replace("typing.", "")
+        parts.append(f"{f.name} ({name})")
+    return ", ".join(parts)
+
+
+def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
+    """Add ``--system``, ``--set``, ``--nx``, ``--nz`` and ``--out`` (default ``results/<command>``)."""
+    g = parser.add_argument_group("system", "which rotor-bearing system to analyse (SI inputs; see gfbjax.SystemSpec)")
+    g.add_argument(
+        "--system", default="reference", metavar="NAME|FILE.toml",
+        help=("named system: " + ", ".join(SYSTEM_NAMES) + " (the paper's design variations of the reference "
+              "system, DESIGN.md; validation10N/15N: rigid rotor of Table 1), or a .toml file of SystemSpec fields "
+              "with an optional 'base' key naming one of these (default: %(default)s)"))
+    g.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="FIELD=VALUE",
+        help=("override a SystemSpec field, repeatable, e.g. --set alpha_f=0.3 --set rotor=rigid; the value is "
+              "converted to the field's type ('none' for an optional field). Fields: " + _field_doc()))
+    g.add_argument("--nx", type=int, default=None, metavar="N",
+                   help="circumferential finite-difference intervals over the 2 pi of the foil (SystemSpec.Nx; "
+                        f"default {SystemSpec.Nx}, at least 16)")
+    g.add_argument("--nz", type=int, default=None, metavar="N",
+                   help="axial intervals over the half length, edge to mid-plane (SystemSpec.Nz; "
+                        f"default {SystemSpec.Nz}, at least 2)")
+    g.add_argument("--out", type=Path, default=Path("results") / command, metavar="DIR",
+                   help="output folder, created if needed (default: %(default)s)")
+
+
+def _convert(name: str, text: str, tp: Any) -> Any:
+    """Convert ``text`` to the type ``tp`` of field ``name`` (float, int, str, bool, or an Optional of these)."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if text.strip().lower() in ("none", "null", ""):
+            return None
+        if len(args) == 1:
+            return _convert(name, text, args[0])
+    if tp is bool:
+        low = text.strip().lower()
+        if low in ("1", "true", "yes", "on"):
+            return True
+        if low in ("0", "false", "no", "off"):
+            return False
+        raise ParameterError(f"--set {name}: expected true or false, got {text!r}")
+    if tp is int:
+        try:
+            return int(text)
+        except ValueError:
+            try:
+                v = float(text)
+            except ValueError:
+                v = math.nan
+            if math.isfinite(v) and v == int(v):
+                return int(v)
+            raise ParameterError(f"--set {name}: expected an integer, got {text!r}") from None
+    if tp is float:
+        try:
+            return float(text)
+        except ValueError:
+            low = text.strip().lower()
+            consts = {"pi": math.pi, "-pi": -math.pi, "pi/2": math.pi / 2, "-pi/2": -math.pi / 2,
+                      "2pi": 2 * math.pi, "3pi/2": 1.5 * math.pi}
+            if low in consts:
+                return consts[low]
+            raise ParameterError(f"--set {name}: expected a real number, got {text!r}") from None
+    if tp is str:
+        return text
+    raise ParameterError(f"--set {name}: fields of type {tp} cannot be set from the command line")
+
+
+def parse_set(items: Iterable[str]) -> dict[str, Any]:
+    """``["FIELD=VALUE", ...]`` -> ``{field: typed value}``; unknown fields and bad values raise ParameterError."""
+    hints = typing.get_type_hints(SystemSpec)
+    out: dict[str, Any] = {}
+    for item in items:
+        if "=" not in item:
+            raise ParameterError(f"--set expects FIELD=VALUE, got {item!r}")
+        name, text = (s.strip() for s in item.split("=", 1))
+        if name not in hints:
+            raise ParameterError(f"--set {name}: unknown SystemSpec field; allowed: {', '.join(hints)}")
+        out[name] = _convert(name, text, hints[name])
+    return out
+
+
+def spec_from_args(args: argparse.Namespace) -> SystemSpec:
+    """The SystemSpec of ``--system`` with ``--set``, ``--nx`` and ``--nz`` applied (all checked)."""
+    spec = system_from_name_or_file(args.system)
+    changes = parse_set(getattr(args, "overrides", []) or [])
+    if getattr(args, "nx", None) is not None:
+        changes["Nx"] = args.nx
+    if getattr(args, "nz", None) is not None:
+        changes["Nz"] = args.nz
+    return spec.replace(**changes) if changes else spec
+
+
+def traced_params(spec: SystemSpec):
+    """``spec.nondim()`` with every float leaf turned into a JAX array.
+
+    ``eqx.filter_jit`` treats Python floats as static, so solving for many values of a parameter (a load ramp,
+    several alpha_f) would recompile each time; array leaves are traced and compile once per grid.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    return jax.tree_util.tree_map(jnp.asarray, spec.nondim())
+
+
+def output_dir(args: argparse.Namespace) -> Path:
+    """``--out`` as a created folder."""
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"--out {str(out)!r} cannot be created: {exc.strerror or exc}") from None
+    if not out.is_dir():
+        raise ParameterError(f"--out {str(out)!r} is not a folder")
+    return out
+
+
+def float_list(option: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
+               increasing: bool = False, what: str = ""):
+    """An argparse ``type`` for comma-separated numbers, checked against ``[lo, hi]`` (``(lo, hi]`` with
+    ``lo_open``); errors name ``option``."""
+    def parse(text: str) -> list[float]:
+        try:
+            vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+        if not vals:
+            raise argparse.ArgumentTypeError("expected at least one number")
+        for v in vals:
+            check_option(option, v, lo, hi, lo_open=lo_open, what=what, exc=argparse.ArgumentTypeError)
+        if increasing and any(b <= a for a, b in zip(vals, vals[1:])):
+            raise argparse.ArgumentTypeError(f"values must increase, got {text!r}")
+        return vals
+    return parse
+
+
+def check_option(option: str, value: float, lo: float | None = None, hi: float | None = None, *,
+                 lo_open: bool = False, what: str = "", exc: type[Exception] = ParameterError) -> float:
+    """Check a numeric option; raise ``exc`` with a message naming ``option`` and the allowed range."""
+    bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) or (
+        hi is not None and value > hi)
+    if bad:
+        left = "(" if lo_open else "["
+        rng = f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+        extra = f" ({what})" if what else ""
+        msg = f"{option} = {value:g} is outside the allowed range {rng}{extra}"
+        if exc is argparse.ArgumentTypeError:
+            msg = f"{value:g} is outside the allowed range {rng}{extra}"
+        raise exc(msg)
+    return value
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert numpy/jax scalars and arrays, complex numbers, paths and dataclasses to JSON types."""
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, complex):
+        return [obj.real, obj.imag]
+    if isinstance(obj, (np.generic,)):
+        return to_jsonable(obj.item())
+    if hasattr(obj, "__array__") and not isinstance(obj, (str, bytes)):
+        return to_jsonable(np.asarray(obj).tolist())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    return obj
+
+
+def write_json(path: Path, data: Any) -> Path:
+    path.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
+    return path

@@ -1,0 +1,176 @@
+"""``gfbjax runup``: run-up (or coast-down) transient at constant angular acceleration (paper Eq. 15b, Fig. 7a-c):
+time history of the journal against speed, STFT spectrogram in multiples of the running frequency, and the speeds
+where sub-synchronous components appear."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # multi-threaded LAPACK on ~300x300 LUs only costs (see transient)
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import time  # noqa: E402
+from typing import Any  # noqa: E402
+
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
+
+NAME = "runup"
+
+DESCRIPTION = """\
+Run-up (end > start) or coast-down (end < start) of the unbalanced rotor at constant angular acceleration
+(paper Eq. 15b), integrated with diffrax (Kvaerno5, sparse Jacobian, dense LU) from the static equilibrium at the
+start speed, after --settle-revs revolutions at the start speed.  A progress bar advances per chunk; a rub (the
+film thickness reaching --h-rub) ends the run and keeps what was computed.
+
+Writes to --out: runup.npz (time history: tau, speed, rotor states, h_min; gfbjax.transient.TransientResult.load),
+runup.json (summary, sub-synchronous speed ranges, solver statistics), runup_response.png (journal vertical and
+horizontal displacement against speed, paper Fig. 7a/b) and runup_stft.png (STFT against speed, Fig. 7c).
+Exit status: 0 completed, 1 rub or solver failure, 2 invalid input.
+"""
+
+EPILOG = """\
+units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); accel is per tau^2 (tau = t/t*);
+displacements over the clearance c.
+
+examples:
+  gfbjax runup                                    reference system, Omega_bar 0.05 -> 1.0 in 400 revolutions
+  gfbjax runup --start 0.2 --end 0.6 --revs 150 --nx 24 --nz 3
+  gfbjax runup --system ks3 --start 1.0 --end 0.1 --revs 300      coast-down
+"""
+
+
+def register(subparsers: Any) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(NAME, help="run-up/coast-down transient, STFT and sub-synchronous onset (Fig. 7)",
+                              description=DESCRIPTION, epilog=EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_system_options(p, NAME)
+    r = p.add_argument_group("run-up")
+    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
+    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    a = r.add_mutually_exclusive_group()
+    a.add_argument("--revs", type=float, default=None, metavar="N",
+                   help="revolutions from start to end speed, sets the acceleration (default 400)")
+    a.add_argument("--accel", type=float, default=None, metavar="A_BAR",
+                   help="angular acceleration per tau^2 (sign from the direction of the run)")
+    r.add_argument("--settle-revs", type=float, default=20.0, metavar="N",
+                   help="revolutions at the start speed before the run-up, so that the start transient has "
+                        "decayed (default 20; 0 = none)")
+    s = p.add_argument_group("solver")
+    s.add_argument("--solver", default="kvaerno5", choices=["kvaerno5", "kvaerno4", "kvaerno3"])
+    s.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5)")
+    s.add_argument("--atol", type=float, default=1e-7, help="absolute tolerance (default 1e-7)")
+    s.add_argument("--samples-per-rev", type=int, default=32, help="saved samples per revolution at the top speed")
+    s.add_argument("--chunk-revs", type=float, default=10.0, help="revolutions per chunk (progress bar step)")
+    s.add_argument("--h-rub", type=float, default=0.01, help="film thickness h/c that counts as rub (default 0.01)")
+    o = p.add_argument_group("analysis and output")
+    o.add_argument("--segment-revs", type=float, default=12.0,
+                   help="STFT segment length in revolutions at the top speed (default 12)")
+    o.add_argument("--rel", type=float, default=0.1,
+                   help="a sub-synchronous peak counts above this fraction of the 1X amplitude (default 0.1)")
+    o.add_argument("--floor", type=float, default=1e-3,
+                   help="... and above this absolute amplitude over c (default 1e-3)")
+    o.add_argument("--no-figures", action="store_true", help="no PNG figures")
+    o.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import gfbjax
+
+    from ..signals import runup_stft, subsynchronous
+    from ..transient import TransientSettings, default_initial_state, run_up, simulate
+
+    t_start = time.perf_counter()
+    spec = spec_from_args(args)
+    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    if args.start == args.end:
+        check_option("--end", args.end, args.start, args.start, lo_open=True, what="must differ from --start")
+    if args.revs is not None:
+        check_option("--revs", args.revs, 0.0, 1e6, lo_open=True, what="revolutions")
+    check_option("--settle-revs", args.settle_revs, 0.0, 1e5, what="revolutions")
+    settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
+                                 samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
+    out = output_dir(args)
+    params = traced_params(spec)
+    progress = not args.quiet
+
+    s0, note = default_initial_state(params, args.start)
+    print(f"gfbjax runup: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, Omega_bar {args.start:g} -> "
+          f"{args.end:g}; {note}", flush=True)
+    if args.settle_revs > 0:
+        settle = simulate(params, args.start, revolutions=float(round(args.settle_revs)), s0=s0, settings=settings,
+                          progress=progress)
+        if settle.outcome != "completed":
+            print(f"  settling at the start speed ended: {settle.message}", flush=True)
+            settle.save(out / "runup.npz")
+            return 1
+        s0 = settle.final_state
+    revs = 400.0 if (args.revs is None and args.accel is None) else args.revs
+    res = run_up(params, args.start, args.end, accel=args.accel, revolutions=revs, s0=s0, settings=settings,
+                 progress=progress)
+    res.save(out / "runup.npz")
+
+    c_um = spec.c * 1e6
+    st = res.stats
+    lines = [
+        f"  outcome           {res.outcome}: {res.message}",
+        f"  acceleration      a_bar = {res.accel:.4g} per tau^2 ({res.revolutions:.1f} revolutions, "
+        f"tau = {res.tau[-1]:.5g}, {res.tau[-1] * spec.t_star:.4g} s)",
+        f"  solver            {settings.solver}, rtol {settings.rtol:g}, atol {settings.atol:g}: {st['steps']} steps "
+        f"({st['rejected']} rejected), wall {st['wall_s']:.1f} s, CPU {st['cpu_s']:.1f} s, "
+        f"{st['steps_per_s']:.0f} steps/s, {st['revs_per_s']:.2f} rev/s",
+        f"  film              min h = {res.h_min.min():.4f} c ({res.h_min.min() * c_um:.2f} um)",
+    ]
+    ranges: dict[str, list] = {}
+    spectros = {}
+    if res.tau.size > 64:
+        for key, sig in (("y_j", res.y_j), ("x_j", res.x_j)):
+            sg = runup_stft(res.tau, sig, res.speed, segment_revs=args.segment_revs)
+            spectros[key] = sg
+            ranges[key] = subsynchronous(sg, rel=args.rel, floor=args.floor)
+        for key, rs in ranges.items():
+            if not rs:
+                lines.append(f"  sub-synchronous   {key}: none above {args.rel:g} x 1X and {args.floor:g} c")
+            for r in rs:
+                lines.append(f"  sub-synchronous   {key}: Omega_bar {r.speed_start:.4f} - {r.speed_end:.4f}, "
+                             f"strongest at {r.order:.3f} X (omega = {r.omega:.4f} per tau, "
+                             f"{r.omega / spec.t_star / (2 * math.pi):.1f} Hz), {r.amplitude:.3g} c = "
+                             f"{r.rel_amplitude:.2f} x 1X")
+    print("\n".join(lines), flush=True)
+
+    figures = []
+    if not args.no_figures:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from ..plot_transient import plot_runup, plot_spectrogram
+
+        fig = plot_runup(res, c_um=c_um, title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)",
+                         path=out / "runup_response.png")
+        plt.close(fig)
+        figures.append("runup_response.png")
+        if "y_j" in spectros:
+            fig = plot_spectrogram(spectros["y_j"], subsync=ranges["y_j"],
+                                   title=f"STFT of y_j, system '{args.system}' (paper Fig. 7c)",
+                                   path=out / "runup_stft.png")
+            plt.close(fig)
+            figures.append("runup_stft.png")
+
+    data = {
+        "command": NAME, "gfbjax_version": gfbjax.__version__,
+        "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
+        "run": res.summary(),
+        "subsynchronous": {k: [vars(r) for r in rs] for k, rs in ranges.items()},
+        "figures": figures, "total_s": time.perf_counter() - t_start,
+    }
+    write_json(out / "runup.json", data)
+    print(f"  wrote             {out}/: runup.npz, runup.json" + "".join(f", {f}" for f in figures)
+          + f"  ({data['total_s']:.1f} s)", flush=True)
+    return 0 if res.outcome == "completed" else 1

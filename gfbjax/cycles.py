@@ -1,0 +1,142 @@
+"""Limit cycles of the unbalanced GFB-rotor system and equilibria of the balanced one, on the generic engine
+:mod:`gfbjax.cont` (paper Sect. 2.3, 3.2, Appendix A1).
+
+The cycles are those of the autonomous system of Eq. (21)-(22): the phase oscillator makes the unbalance forcing
+autonomous, so a synchronous (1X) response is a periodic orbit of period ``T = 2 pi / Omega_bar`` and the Floquet
+multipliers carry one trivial multiplier at +1.  The continuation parameter is the speed Omega_bar.
+
+A branch starts at a low speed from the *linear forced response* around the static equilibrium,
+
+    x(tau) = x_eq + Re( (i Omega I - J)^-1 B eps Omega^2 (1, -i) e^{i Omega tau} ),
+
+with J the Jacobian of the balanced system and B the input matrix of the unbalance force, a first-order harmonic
+balance that puts collocation Newton well inside its basin.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import cont
+from .model import core_rates, layout, vector_field
+from .params import ParameterError, Params
+from .static import StaticResult, solve_equilibrium
+
+__all__ = ["JOURNAL_AND_DISC", "gfb_cycle_problem", "gfb_equilibrium_problem", "linear_response_start",
+           "rotor_components", "continue_gfb_cycles", "continue_gfb_equilibria"]
+
+JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
+
+
+def _f_cycles(x, lam, args):
+    return vector_field(x, lam, args)
+
+
+def _f_equilibria(x, lam, args):
+    return core_rates(x, lam, jnp.zeros(2, x.dtype), args)
+
+
+def rotor_components(params: Params, oscillator: bool = True) -> list[int]:
+    """State indices of the rotor positions (journal x, y, then disc x, y for the Jeffcott rotor)."""
+    lay = layout(params, oscillator)
+    start = lay.slices["rotor"].start
+    npos = 4 if params.rotor == "jeffcott" else 2
+    return list(range(start, start + npos))
+
+
+def gfb_cycle_problem(params: Params) -> cont.CycleProblem:
+    """Periodic orbits of the autonomous unbalanced system, Eq. (21), in Omega_bar (one trivial multiplier)."""
+    lay = layout(params, oscillator=True)
+    return cont.CycleProblem(f=_f_cycles, n=lay.n, args=params, n_trivial=1,
+                             record=rotor_components(params, True))
+
+
+def gfb_equilibrium_problem(params: Params) -> cont.EquilibriumProblem:
+    """Equilibria of the balanced system (G0) in Omega_bar: Hopf points start self-excited cycles."""
+    lay = layout(params, oscillator=False)
+    return cont.EquilibriumProblem(f=_f_equilibria, n=lay.n, args=params, record=rotor_components(params, False))
+
+
+def linear_response_start(params: Params, omega: float, equilibrium: StaticResult | None = None
+                          ) -> tuple[Callable[[np.ndarray], np.ndarray], float, StaticResult]:
+    """The linear forced response to unbalance around the static equilibrium at ``omega`` (see module doc).
+
+    Returns ``(x_of_t, T, equilibrium)`` with ``x_of_t`` a vectorised function of the scaled time t in [0, 1]
+    giving the full autonomous state (oscillator included) and ``T = 2 pi / omega``.
+    """
+    eq = equilibrium if equilibrium is not None else solve_equilibrium(params, omega)
+    if not eq.converged:
+        raise RuntimeError(f"no static equilibrium at Omega_bar = {omega}: {eq.message}")
+    x_eq = jnp.asarray(eq.state)
+    om = jnp.asarray(float(omega))
+    J = np.asarray(jax.jacfwd(core_rates)(x_eq, om, jnp.zeros(2), params))
+    B = np.asarray(jax.jacfwd(core_rates, argnums=2)(x_eq, om, jnp.zeros(2), params))
+    F = float(params.eps) * float(omega) ** 2 * np.array([1.0, -1.0j])
+    X = np.linalg.solve(1j * float(omega) * np.eye(J.shape[0]) - J, B @ F)
+    T = 2.0 * math.pi / float(omega)
+    xe = np.asarray(x_eq)
+
+    def x_of_t(t: np.ndarray) -> np.ndarray:
+        ph = 2.0 * math.pi * np.asarray(t)
+        core = xe[None, :] + np.real(X[None, :] * np.exp(1j * ph)[:, None])
+        return np.concatenate([core, np.cos(ph)[:, None], np.sin(ph)[:, None]], axis=1)
+
+    return x_of_t, T, eq
+
+
+def _check_speed_range(omega_start: float, omega_end: float) -> None:
+    for name, v in (("omega_start", omega_start), ("omega_end", omega_end)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= 50.0):
+            raise ParameterError(f"{name} = {v!r} is outside the allowed range (0, 50] (Omega_bar)")
+    if omega_start == omega_end:
+        raise ParameterError("omega_start and omega_end must differ")
+
+
+def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
+                        settings: cont.CycleSettings | None = None, *, progress: bool = False,
+                        callback: Callable[[int, Any], Any] | None = None) -> cont.Branch:
+    """Branch of unbalance-response limit cycles from ``omega_start`` towards ``omega_end`` (Omega_bar).
+
+    The start is the linear forced response at ``omega_start`` (corrected by collocation Newton); the branch
+    follows pseudo-arclength continuation with Floquet multipliers and LPC/PD/NS detection.  ``settings`` may
+    omit the speed bounds: they are set from the range.  Whatever ends the branch, the finished points are
+    returned with the reason (``Branch.reason``).
+    """
+    _check_speed_range(omega_start, omega_end)
+    if float(params.eps) <= 0.0:
+        raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
+                             "and start cycles from its Hopf point")
+    settings = settings or cont.CycleSettings()
+    lo, hi = sorted((omega_start, omega_end))
+    direction = 1 if omega_end > omega_start else -1
+    import dataclasses
+
+    settings = dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
+                                   direction=direction)
+    x_of_t, T, _ = linear_response_start(params, omega_start)
+    start = cont.start_from_function(x_of_t, T, omega_start, settings)
+    return cont.continue_cycles(gfb_cycle_problem(params), settings, start, progress=progress, callback=callback)
+
+
+def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float,
+                            settings: cont.EquilibriumSettings | None = None, **kw: Any) -> cont.Branch:
+    """Branch of static equilibria of the balanced system in Omega_bar, with eigenvalues, Hopf and fold points."""
+    _check_speed_range(omega_start, omega_end)
+    eq = solve_equilibrium(params, omega_start)
+    if not eq.converged:
+        raise RuntimeError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")
+    settings = settings or cont.EquilibriumSettings()
+    import dataclasses
+
+    lo, hi = sorted((omega_start, omega_end))
+    fields = {f.name for f in dataclasses.fields(settings)}
+    upd = {k: v for k, v in (("lam_min", lo), ("lam_max", hi),
+                             ("direction", 1 if omega_end > omega_start else -1)) if k in fields}
+    settings = dataclasses.replace(settings, **upd)
+    return cont.continue_equilibria(gfb_equilibrium_problem(params), settings, eq.state, omega_start, **kw)

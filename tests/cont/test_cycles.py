@@ -1,0 +1,133 @@
+"""Cycle continuation: Hopf switching (super/subcritical), radius sqrt(lam),
+fold of cycles, branch storage, settings validation."""
+import json
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from gfbjax.cont import (Branch, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
+                         continue_cycles, continue_equilibria, hopf_point, start_from_branch,
+                         start_from_hopf)
+from systems import stuart_landau, stuart_landau_sub
+
+W = 2.0
+
+
+def _hopf(field):
+    prob = EquilibriumProblem(field, 2, jnp.asarray(W))
+    br = continue_equilibria(prob, EquilibriumSettings(ds=0.07, max_points=8), np.zeros(2), -0.3)
+    return hopf_point(prob, br)
+
+
+@pytest.fixture(scope="module")
+def sl_branch():
+    st = CycleSettings(m=4, N=10, ds=0.05, ds_max=0.2, max_points=12, lam_max=1.0, save_states=True)
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    return continue_cycles(prob, st, start_from_hopf(_hopf(stuart_landau), st))
+
+
+def test_supercritical_hopf_branch(sl_branch):
+    br = sl_branch
+    assert len(br) >= 6, br.reason
+    assert np.all(br.lam > 0)                                   # supercritical: lam > 0
+    assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)       # radius sqrt(lam)
+    assert np.allclose(br.period, np.pi, rtol=1e-8)             # 2 pi / w
+    # max over the collocation nodes (sampled, <= true max)
+    assert np.all(br.xmax[:, 0] <= np.sqrt(br.lam) * (1 + 1e-12))
+    assert np.allclose(br.xmax[:, 0], np.sqrt(br.lam), rtol=1e-3)
+    assert np.max(br.trivial_error) < 1e-10
+    assert np.allclose(br.multipliers[:, 1].real, np.exp(-2 * br.lam * np.pi), atol=1e-8)
+    assert np.all(br.stable)
+    assert br.reason.startswith("lam=") or br.reason == "max_points reached"
+    assert br.special == []
+
+
+def test_save_load_roundtrip_plain_numpy(sl_branch, tmp_path):
+    npz, js = sl_branch.save(tmp_path / "sl")
+    with np.load(npz) as z:                      # plain numpy + json, no gfbjax
+        assert np.array_equal(z["lam"], sl_branch.lam)
+        assert np.array_equal(z["multipliers"], sl_branch.multipliers)
+        assert z["state_xm"].shape == (len(sl_branch), 11, 2)
+    meta = json.loads(js.read_text())
+    assert meta["kind"] == "cycles" and meta["reason"] == sl_branch.reason and "lam" in meta["keys"]
+    back = Branch.load(tmp_path / "sl")
+    for k in ("lam", "period", "l2", "xmax", "xmin", "multipliers", "stable", "newton_iterations", "ds"):
+        assert np.array_equal(getattr(back, k), getattr(sl_branch, k)), k
+    assert back.reason == sl_branch.reason and back.m == 4
+
+
+def test_restart_from_saved_point(sl_branch):
+    st = CycleSettings(m=4, N=10, ds=0.05, max_points=3, direction=-1)
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    br = continue_cycles(prob, st, start_from_branch(sl_branch, 4))
+    assert len(br) == 3 and br.lam[0] == pytest.approx(sl_branch.lam[4], abs=1e-12)
+    assert br.lam[2] < br.lam[1] < br.lam[0]                    # direction=-1 honoured
+    assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)
+
+
+def test_natural_parameter_mode():
+    st = CycleSettings(m=4, N=10, ds=0.1, max_points=4, mode="natural", predictor="secant")
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    from gfbjax.cont import start_from_function
+    start = start_from_function(lambda t: 0.6 * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                np.pi, 0.3, st)
+    br = continue_cycles(prob, st, start)
+    assert np.allclose(np.diff(br.lam), 0.1, atol=1e-10)
+    assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)
+
+
+def test_subcritical_hopf_and_fold_of_cycles():
+    """r' = r (lam + r^2 - r^4): the branch leaves the Hopf point towards lam < 0
+    (unstable cycles), turns at the fold of cycles r^2 = 1/2, lam = -1/4, and
+    comes back as stable cycles."""
+    st = CycleSettings(m=4, N=10, ds=0.05, ds_max=0.1, max_points=25, lam_max=0.2)
+    prob = CycleProblem(stuart_landau_sub, 2, jnp.asarray(W))
+    br = continue_cycles(prob, st, start_from_hopf(_hopf(stuart_landau_sub), st))
+    assert br.lam[0] < 0 and not br.stable[0]
+    r2 = br.l2 ** 2
+    assert np.allclose(br.lam, r2 ** 2 - r2, atol=1e-9)
+    lpc = br.special_of("LPC")
+    assert len(lpc) == 1 and lpc[0]["located"], br.special
+    assert abs(lpc[0]["lam"] + 0.25) < 1e-8
+    assert br.stable[-1] and br.lam[-1] > -0.25
+
+
+def test_bad_settings_name_the_field():
+    with pytest.raises(ValueError, match="ds_min"):
+        CycleSettings(ds=0.1, ds_min=0.5)
+    with pytest.raises(ValueError, match="m "):
+        CycleSettings(m=9)
+    with pytest.raises(ValueError, match="mode"):
+        CycleSettings(mode="shooting")
+    with pytest.raises(ValueError, match="n_trivial"):
+        CycleProblem(stuart_landau, 2, n_trivial=3)
+
+
+def test_neimark_sacker_detection_and_angle():
+    from gfbjax.cont import start_from_function
+    from systems import torus_field
+    nu = 0.7
+    T = 2 * np.pi / W
+    st = CycleSettings(m=4, N=10, ds=0.1, ds_max=0.2, max_points=20, lam_max=0.8, detect=("NS", "PD", "LPC"))
+    prob = CycleProblem(torus_field, 4, jnp.asarray([W, nu]))
+    start = start_from_function(
+        lambda t: np.stack([np.sqrt(0.3) * np.cos(2 * np.pi * t), np.sqrt(0.3) * np.sin(2 * np.pi * t),
+                            0 * t, 0 * t], 1), T, 0.3, st)
+    br = continue_cycles(prob, st, start)
+    ns = br.special_of("NS")
+    assert len(ns) == 1 and ns[0]["located"], br.special
+    assert abs(ns[0]["lam"] - 0.5) < 1e-8
+    assert abs(ns[0]["angle"] - nu * T) < 1e-8
+    assert br.stable[0] and not br.stable[-1]
+
+
+def test_continuation_compiles_newton_kernel_once(sl_branch):
+    """The Newton kernel is traced once per (f, n, N, m): lam, T, references are
+    traced arrays.  Another continuation with the same shapes adds no entry."""
+    from gfbjax.cont import collocation as col
+    before = col._step_and_tangent._cache_size()
+    st = CycleSettings(m=4, N=10, ds=0.05, max_points=3)
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    continue_cycles(prob, st, start_from_branch(sl_branch, 2))
+    assert col._step_and_tangent._cache_size() == before
