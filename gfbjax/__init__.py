@@ -2,9 +2,22 @@
 
 Importing gfbjax turns on JAX's 64-bit mode: Newton corrections, Floquet multipliers that span many decades and
 finite-difference checks of gradients all need double precision.
+
+Two process-wide defaults are set at import, before any JAX computation, and only where the user has not set them:
+``XLA_FLAGS += --xla_cpu_enable_concurrency_optimized_scheduler=false`` (the compiled collocation Newton step
+dead-locks under XLA:CPU's concurrency-optimised scheduler, seen for n = 10, N >= 30 intervals), and
+``OPENBLAS_NUM_THREADS=1`` (several BLAS threads on a busy 2-core machine slowed the small dense QR/LU factorisations
+of the solvers ~100-1000x; it takes effect only if numpy was not imported before gfbjax).
 """
 
-import jax
+import os as _os
+
+if "xla_cpu_enable_concurrency_optimized_scheduler" not in _os.environ.get("XLA_FLAGS", ""):
+    _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "")
+                                + " --xla_cpu_enable_concurrency_optimized_scheduler=false").strip()
+_os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 

@@ -28,7 +28,7 @@ from .model import core_rates, layout, vector_field
 from .params import ParameterError, Params
 from .static import StaticResult, solve_equilibrium
 
-__all__ = ["JOURNAL_AND_DISC", "gfb_cycle_problem", "gfb_equilibrium_problem", "linear_response_start",
+__all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem", "linear_response_start",
            "rotor_components", "continue_gfb_cycles", "continue_gfb_equilibria"]
 
 JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
@@ -90,6 +90,18 @@ def linear_response_start(params: Params, omega: float, equilibrium: StaticResul
     return x_of_t, T, eq
 
 
+def default_cycle_settings(**changes: Any) -> cont.CycleSettings:
+    """Cycle-continuation settings tuned for the GFB system.
+
+    The arclength metric includes the period ``T = 2 pi / Omega_bar``, which changes by ``2 pi / Omega_bar^2`` per
+    unit speed (2500 at Omega_bar = 0.05): steps are large in that metric (``ds`` up to 20) and the speed change
+    per step is capped by ``dlam_max`` instead.
+    """
+    base = dict(m=4, N=16, ds=0.5, ds_min=1e-4, ds_max=20.0, dlam_max=0.02, max_points=200)
+    base.update(changes)
+    return cont.CycleSettings(**base)
+
+
 def _check_speed_range(omega_start: float, omega_end: float) -> None:
     for name, v in (("omega_start", omega_start), ("omega_end", omega_end)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= 50.0):
@@ -112,7 +124,7 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
                              "and start cycles from its Hopf point")
-    settings = settings or cont.CycleSettings()
+    settings = settings or default_cycle_settings()
     lo, hi = sorted((omega_start, omega_end))
     direction = 1 if omega_end > omega_start else -1
     import dataclasses

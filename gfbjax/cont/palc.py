@@ -42,6 +42,8 @@ class CycleSettings:
     m, N: collocation points per interval and mesh intervals (for starts built
     from samples / Hopf points; a given start orbit keeps its own mesh).
     ds: initial step (> 0); direction: +1/-1 initial orientation in lam.
+    dlam_max: largest change of lam in one step (caps ds when the tangent is nearly
+    parallel to lam's axis in the arclength metric; inf = no cap).
     """
 
     m: int = 4
@@ -53,6 +55,7 @@ class CycleSettings:
     max_points: int = 100
     lam_min: float = -np.inf
     lam_max: float = np.inf
+    dlam_max: float = np.inf
     newton_tol: float = 1e-9
     newton_step_tol: float = 1e-9
     newton_max_iter: int = 8
@@ -77,6 +80,8 @@ class CycleSettings:
         if self.direction not in (1, -1):
             raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
         check_range("max_points", self.max_points, 1, 10**7, integer=True)
+        if not (isinstance(self.dlam_max, (int, float)) and self.dlam_max > 0.0):
+            raise ValueError(f"dlam_max must be in (0, inf], got {self.dlam_max!r}")
         if not self.lam_min < self.lam_max:
             raise ValueError(f"lam_min must be < lam_max, got lam_min={self.lam_min}, lam_max={self.lam_max}")
         check_range("newton_tol", self.newton_tol, 0.0, 1.0, lo_open=True)
@@ -271,9 +276,12 @@ def _loop(problem, settings, scheme, start, points, special, special_states, cal
             if s.predictor == "secant" and X_prev is not None:
                 sec = X + X_prev.scale(-1.0)
                 direction = sec.scale(1.0 / float(jnp.sqrt(col.inner(sec, sec, scheme))))
+            # cap the parameter change per step: the arclength metric can be dominated by T or by many states
+            ds = min(ds, s.dlam_max / max(abs(float(direction.lam)), 1e-300))
             pred = X + direction.scale(ds)
             con = col.palc_constraint(X, direction, ds, ref=pred)
         else:
+            ds = min(ds, s.dlam_max)
             step = ds * float(s.direction)
             pred = X
             if X_prev is not None:

@@ -7,7 +7,7 @@ from scipy.integrate import solve_ivp
 
 from gfbjax.cont import collocation as col
 from gfbjax.cont import floquet
-from systems import stuart_landau, van_der_pol
+from cont_systems import stuart_landau, van_der_pol
 
 W = 2.0
 

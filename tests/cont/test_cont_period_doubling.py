@@ -16,7 +16,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_pd, start_from_samples
-from systems import forced_duffing
+from cont_systems import forced_duffing
 
 D, W = 0.3, 1.2
 T = 2 * np.pi / W
@@ -75,7 +75,7 @@ def test_pd_parameter_matches_scipy_reference(reference, pd_branch):
     assert br.reason.startswith("lam="), br.reason
     pds = br.special_of("PD")
     assert len(pds) == 1 and pds[0]["located"], br.special
-    print(f"PD gamma: engine {pds[0]['lam']:.10f}  scipy reference {g_ref:.10f}")
+    print(f"PD gamma: engine {pds[0]['lam']:.13f}  scipy reference {g_ref:.13f}  diff {pds[0]['lam'] - g_ref:.2e}")
     assert abs(pds[0]["lam"] - g_ref) < 1e-6
     mu = pds[0]["multipliers"]
     assert np.min(np.abs(mu + 1.0)) < 1e-6

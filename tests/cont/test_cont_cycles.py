@@ -9,7 +9,7 @@ import pytest
 from gfbjax.cont import (Branch, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
                          continue_cycles, continue_equilibria, hopf_point, start_from_branch,
                          start_from_hopf)
-from systems import stuart_landau, stuart_landau_sub
+from cont_systems import stuart_landau, stuart_landau_sub
 
 W = 2.0
 
@@ -106,7 +106,7 @@ def test_bad_settings_name_the_field():
 
 def test_neimark_sacker_detection_and_angle():
     from gfbjax.cont import start_from_function
-    from systems import torus_field
+    from cont_systems import torus_field
     nu = 0.7
     T = 2 * np.pi / W
     st = CycleSettings(m=4, N=10, ds=0.1, ds_max=0.2, max_points=20, lam_max=0.8, detect=("NS", "PD", "LPC"))
@@ -131,3 +131,20 @@ def test_continuation_compiles_newton_kernel_once(sl_branch):
     prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
     continue_cycles(prob, st, start_from_branch(sl_branch, 2))
     assert col._step_and_tangent._cache_size() == before
+
+
+def test_callback_stop_and_errors_keep_the_branch(sl_branch):
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    st = CycleSettings(m=4, N=10, ds=0.05, max_points=10, floquet="product")
+    seen = []
+    br = continue_cycles(prob, st, start_from_branch(sl_branch, 3),
+                         callback=lambda i, rec: seen.append(i) or len(seen) < 3)
+    assert br.reason == "stopped by callback" and len(br) == 3 and seen == [0, 1, 2]
+    assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)
+
+    def boom(i, rec):
+        if i == 2:
+            raise RuntimeError("model blew up")
+
+    br = continue_cycles(prob, st, start_from_branch(sl_branch, 3), callback=boom, progress=True)
+    assert br.reason.startswith("error: RuntimeError('model blew up')") and len(br) == 3

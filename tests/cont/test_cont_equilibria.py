@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gfbjax.cont import EquilibriumProblem, EquilibriumSettings, continue_equilibria, hopf_point
-from systems import fold_1d, stuart_landau
+from cont_systems import fold_1d, stuart_landau
 
 
 def test_fold_at_zero():
