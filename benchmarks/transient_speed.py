@@ -1,4 +1,4 @@
-"""Simulated revolutions per wall-second at the default grid (SystemSpec defaults, 281 states): diffrax (Kvaerno5 /
+"""Simulated revolutions per wall-second at the default grid (SystemSpec defaults): diffrax (Kvaerno5 /
 Kvaerno3, sparse-coloured or dense Jacobian) against scipy.integrate.solve_ivp (Radau, BDF) with the exact jitted
 Jacobian, same system, rtol/atol and span, in the same run.  End states are compared with a tight diffrax reference
 (rtol 1e-9) to check matched accuracy.  Writes benchmarks/results/transient_speed.json.

@@ -31,7 +31,7 @@ import numpy as np
 
 from .branch import Branch, PointRecord
 from .events import locate
-from .problem import EquilibriumProblem, check_range
+from .problem import check_step_settings, EquilibriumProblem, check_range
 
 IMAG_TOL = 1e-8
 
@@ -54,14 +54,7 @@ class EquilibriumSettings:
     locate_tol: float = 1e-10
 
     def __post_init__(self) -> None:
-        check_range("ds", self.ds, 0.0, np.inf, lo_open=True, hi_open=True)
-        if not (isinstance(self.ds_min, (int, float)) and 0.0 < self.ds_min <= self.ds):
-            raise ValueError(f"ds_min must be in (0, ds={self.ds}], got {self.ds_min!r}")
-        if not (isinstance(self.ds_max, (int, float)) and self.ds <= self.ds_max < np.inf):
-            raise ValueError(f"ds_max must be in [ds={self.ds}, inf), got {self.ds_max!r}")
-        if self.direction not in (1, -1):
-            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
-        check_range("max_points", self.max_points, 1, 10**7, integer=True)
+        check_step_settings(self)
         if not self.lam_min < self.lam_max:
             raise ValueError(f"lam_min must be < lam_max, got lam_min={self.lam_min}, lam_max={self.lam_max}")
         check_range("newton_tol", self.newton_tol, 0.0, 1.0, lo_open=True)

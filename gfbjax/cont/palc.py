@@ -32,7 +32,7 @@ from . import collocation as col
 from .branch import Branch, PointRecord
 from .events import cycle_test_functions, detect, double_orbit_pd, locate, ns_angle
 from .floquet import multipliers_periodic, multipliers_product, nontrivial, trivial_error
-from .problem import CycleProblem, check_range
+from .problem import check_step_settings, CycleProblem, check_range
 
 
 @dataclass(frozen=True)
@@ -72,14 +72,7 @@ class CycleSettings:
     def __post_init__(self) -> None:
         check_range("m", self.m, 2, 7, integer=True)
         check_range("N", self.N, 2, 10**6, integer=True)
-        check_range("ds", self.ds, 0.0, np.inf, lo_open=True, hi_open=True)
-        if not (isinstance(self.ds_min, (int, float)) and 0.0 < self.ds_min <= self.ds):
-            raise ValueError(f"ds_min must be in (0, ds={self.ds}], got {self.ds_min!r}")
-        if not (isinstance(self.ds_max, (int, float)) and self.ds <= self.ds_max < np.inf):
-            raise ValueError(f"ds_max must be in [ds={self.ds}, inf), got {self.ds_max!r}")
-        if self.direction not in (1, -1):
-            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
-        check_range("max_points", self.max_points, 1, 10**7, integer=True)
+        check_step_settings(self)
         if not (isinstance(self.dlam_max, (int, float)) and self.dlam_max > 0.0):
             raise ValueError(f"dlam_max must be in (0, inf], got {self.dlam_max!r}")
         if not self.lam_min < self.lam_max:
