@@ -280,8 +280,10 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
     iters = 0
     if guess is not None:
         w0 = w if guess_w is None else guess_w
+        # the same load at every fraction: one Newton attempt, no point in halving the ramp step
+        min_step = 1.0 if w0 == w else min_fraction_step
         s, t, res_norm, it = _ramp(jnp.asarray(guess), lambda t: with_load(params, w0 + t * (w - w0)), omega_a,
-                                   xtol, min_fraction_step, first_step=1.0)
+                                   xtol, min_step, first_step=1.0)
         iters += it
         if t >= 1.0:
             return _build_result(s, omega, w, params, "converged", "converged from the given guess", 1.0,
