@@ -42,8 +42,8 @@ class CycleSettings:
     m, N: collocation points per interval and mesh intervals (for starts built
     from samples / Hopf points; a given start orbit keeps its own mesh).
     ds: initial step (> 0); direction: +1/-1 initial orientation in lam.
-    dlam_max: largest change of lam in one step (caps ds when the tangent is nearly
-    parallel to lam's axis in the arclength metric; inf = no cap).
+    dlam_max: largest *predicted* change of lam in one step (caps ds when the tangent is nearly
+    orthogonal to lam in the arclength metric; the corrector may move lam further; inf = no cap).
     """
 
     m: int = 4

@@ -1,0 +1,267 @@
+"""``gfbjax cycles``: branch of unbalance-response limit cycles over a speed range by collocation and pseudo-arclength
+continuation, with Floquet stability and the fold (LPC), period-doubling (PD) and Neimark-Sacker (NS) points
+(paper Sect. 2.3, 3.2, Appendix A1)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from typing import Any
+
+from ..params import ParameterError
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json
+
+NAME = "cycles"
+
+DESCRIPTION = """\
+Continuation of the synchronous (1X) limit cycles of the unbalanced rotor in the speed Omega_bar, from the linear
+forced response at --start towards --end: orthogonal collocation (--N intervals of degree --m), pseudo-arclength
+steps, Floquet multipliers at every point, and the fold (LPC), period-doubling (PD) and Neimark-Sacker (NS)
+bifurcations, located by regula falsi unless --no-locate.  A progress bar advances with the speed.
+
+Writes to --out: branch.npz + branch.json (the branch, gfbjax.cont.Branch.load; plain numpy + json),
+cycles.json (summary: special points with speed, rpm, multipliers' moduli, NS angle; why the branch ended;
+counts; timings), cycles_bifurcation.png (max/min of the journal y_j and x_j against speed, stable solid,
+unstable dashed, special points marked) and cycles_multipliers.png (Floquet multipliers and unit circle).
+Exit status: 0 when the branch reached --end, 1 when it ended early (everything is still written), 2 for
+invalid input.
+"""
+
+EPILOG = """\
+units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); displacements over the clearance c.
+The arclength metric contains the period T = 2 pi / Omega_bar, so steps --ds are large; --dlam-max caps the speed
+change per step.
+
+examples:
+  gfbjax cycles                                   reference system, Omega_bar 0.05 -> 1.0
+  gfbjax cycles --nx 24 --nz 3 --N 16              coarser grid, about 2 minutes
+  gfbjax cycles --system ks3 --start 0.2 --end 0.8 --dlam-max 0.01
+"""
+
+# option -> CycleSettings field
+_FIELDS = {"m": "--m", "N": "--N", "ds": "--ds", "ds_max": "--ds-max", "dlam_max": "--dlam-max",
+           "max_points": "--max-points", "ds_min": "--ds", "lam_min": "--start", "lam_max": "--end"}
+
+
+def register(subparsers: Any) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(NAME, help="limit cycles vs speed: continuation, Floquet stability, LPC/PD/NS points",
+                              description=DESCRIPTION, epilog=EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_system_options(p, NAME)
+    r = p.add_argument_group("speed range")
+    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
+    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    n = p.add_argument_group("numerics")
+    n.add_argument("--m", type=int, default=4, metavar="M",
+                   help="collocation points per mesh interval, 2..7 (default 4)")
+    n.add_argument("--N", type=int, default=16, metavar="N", help="collocation mesh intervals, >= 2 (default 16)")
+    n.add_argument("--ds", type=float, default=0.5, help="initial arclength step (default 0.5)")
+    n.add_argument("--ds-max", type=float, default=20.0, help="largest arclength step (default 20)")
+    n.add_argument("--dlam-max", type=float, default=0.02, metavar="DLAM",
+                   help="largest change of Omega_bar in one step (default 0.02)")
+    n.add_argument("--max-points", type=int, default=200, metavar="P",
+                   help="most points on the branch (default 200)")
+    n.add_argument("--no-locate", action="store_true",
+                   help="do not locate the bifurcations (report the step where they were detected)")
+    o = p.add_argument_group("output")
+    o.add_argument("--no-figures", action="store_true", help="no PNG figures")
+    o.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def _settings(args: argparse.Namespace):
+    from ..cycles import default_cycle_settings
+
+    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    if args.start == args.end:
+        raise ParameterError("--end must differ from --start")
+    check_option("--m", args.m, 2, 7, what="collocation points per interval")
+    check_option("--N", args.N, 2, 10**5, what="mesh intervals")
+    check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
+    check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
+    if args.ds_max < args.ds:
+        raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
+    check_option("--dlam-max", args.dlam_max, 0.0, None, lo_open=True, what="speed change per step")
+    check_option("--max-points", args.max_points, 2, 10**6, what="points")
+    try:
+        return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
+                                      ds_max=args.ds_max, dlam_max=args.dlam_max, max_points=args.max_points,
+                                      locate=not args.no_locate)
+    except ValueError as exc:
+        msg = str(exc)
+        field = msg.split()[0] if msg else ""
+        opt = _FIELDS.get(field, "numerics")
+        raise ParameterError(f"{opt}: {msg}") from None
+
+
+def reached_end(branch: Any, start: float, end: float) -> bool:
+    """Whether the branch got to (or past) ``end``."""
+    if len(branch.lam) == 0:
+        return False
+    last = float(branch.lam[-1])
+    tol = 1e-9 * max(1.0, abs(end))
+    return last >= end - tol if end > start else last <= end + tol
+
+
+def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
+    """The special points of a cycle branch for the JSON summary and the table."""
+    import numpy as np
+
+    from ..cont import nontrivial
+
+    out = []
+    for s in branch.special:
+        mu = np.asarray(s.get("multipliers") if s.get("multipliers") is not None else [], complex)
+        crit = nontrivial(mu, 1) if mu.size else mu
+        crit = crit[np.argsort(-np.abs(crit))] if crit.size else crit
+        lam = float(s["lam"])
+        d: dict[str, Any] = {
+            "type": s["type"], "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.get("period"),
+            "located": bool(s.get("located", False)), "index": s.get("index"),
+            "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
+            "critical_multipliers": [[float(z.real), float(z.imag)] for z in crit[:2]],
+        }
+        if s["type"] == "NS" and s.get("angle") is not None:
+            a = float(s["angle"])
+            d["ns_angle_rad"] = a
+            d["ns_angle_deg"] = math.degrees(a)
+            # the second frequency of the torus, as a multiple of the running frequency (modulo 1)
+            d["ns_frequency_ratio"] = a / (2 * math.pi)
+        out.append(d)
+    return out
+
+
+def format_table(rows: list[dict[str, Any]]) -> str:
+    if not rows:
+        return "  special points    none"
+    lines = ["  special points", f"    {'type':<5} {'Omega_bar':>10} {'rpm':>9}  {'|mu| (largest non-trivial)':<30} "
+             f"{'NS angle':>12}  located"]
+    for d in rows:
+        mods = ", ".join(f"{v:.4f}" for v in d["multiplier_moduli"][:3])
+        ang = f"{d['ns_angle_rad']:.4f} rad" if "ns_angle_rad" in d else ""
+        lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {d['rpm']:>9.0f}  {mods:<30} {ang:>12}  "
+                     f"{'yes' if d['located'] else 'no'}")
+    return "\n".join(lines)
+
+
+class _SpeedBar:
+    """tqdm progress bar advancing with Omega_bar (callback of the continuation)."""
+
+    def __init__(self, start: float, end: float, enabled: bool) -> None:
+        self.start, self.end = start, end
+        self.bar = None
+        self.done = 0.0
+        if enabled:
+            try:
+                from tqdm.auto import tqdm
+
+                self.bar = tqdm(total=round(abs(end - start), 6), desc="cycles",
+                                bar_format="{l_bar}{bar}| [{elapsed}<{remaining}{postfix}]")
+            except ImportError:  # pragma: no cover
+                self.bar = None
+
+    def __call__(self, index: int, rec: Any) -> None:
+        if self.bar is None:
+            return None
+        lam = float(rec.lam)
+        frac = min(max((lam - self.start) / (self.end - self.start), 0.0), 1.0) * abs(self.end - self.start)
+        if frac > self.done:
+            self.bar.update(round(frac - self.done, 6))
+            self.done = frac
+        self.bar.set_postfix_str(f"Omega_bar={lam:.4f}, point {index + 1}, {'stable' if rec.stable else 'unstable'}",
+                                 refresh=False)
+        return None
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import gfbjax
+
+    from ..cycles import continue_gfb_cycles, rotor_components
+
+    t0 = time.perf_counter()
+    spec = spec_from_args(args)
+    settings = _settings(args)
+    out = output_dir(args)
+    params = traced_params(spec)
+    print(f"gfbjax cycles: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
+          f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}", flush=True)
+    bar = _SpeedBar(args.start, args.end, not args.quiet)
+    t1 = time.perf_counter()
+    try:
+        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar)
+    except RuntimeError as exc:  # no static equilibrium at the start speed
+        bar.close()
+        print(f"gfbjax cycles: {exc}", flush=True)
+        return 1
+    bar.close()
+    t_cont = time.perf_counter() - t1
+    branch.save(out / "branch")
+    ok = reached_end(branch, args.start, args.end)
+    rows = special_summary(branch, spec)
+    c_um = spec.c * 1e6
+    n_stable = int(np.sum(branch.stable))
+    lines = [
+        f"  branch            {len(branch)} points ({n_stable} stable, {len(branch) - n_stable} unstable), "
+        f"Omega_bar {float(branch.lam[0]) if len(branch) else math.nan:.4f} -> "
+        f"{float(branch.lam[-1]) if len(branch) else math.nan:.4f}",
+        f"  ended             {branch.reason}" + ("" if ok else "  (before the end of the range)"),
+        f"  time              continuation {t_cont:.1f} s"
+        + (f" ({t_cont / max(len(branch), 1):.2f} s per point)" if len(branch) else ""),
+        format_table(rows),
+    ]
+    if len(branch):
+        lines.insert(1, f"  max trivial error {float(np.nanmax(branch.trivial_error)):.2e} (|mu_trivial - 1|)")
+    print("\n".join(lines), flush=True)
+
+    figures: list[str] = []
+    t2 = time.perf_counter()
+    if not args.no_figures and len(branch):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from ..plot_branch import plot_bifurcation, plot_multipliers
+
+        fig = plot_bifurcation(branch, c_um=c_um, title=f"Limit cycles, system '{args.system}' "
+                                                        f"(Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})",
+                               path=out / "cycles_bifurcation.png")
+        plt.close(fig)
+        figures.append("cycles_bifurcation.png")
+        fig = plot_multipliers(branch, title=f"Floquet multipliers, system '{args.system}'",
+                               path=out / "cycles_multipliers.png")
+        plt.close(fig)
+        figures.append("cycles_multipliers.png")
+    t_fig = time.perf_counter() - t2
+
+    comps = rotor_components(params, True)
+    data = {
+        "command": NAME, "gfbjax_version": gfbjax.__version__,
+        "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star, "c_um": c_um},
+        "range": {"start": args.start, "end": args.end, "reached_end": ok},
+        "settings": {"m": settings.m, "N": settings.N, "ds": settings.ds, "ds_max": settings.ds_max,
+                     "dlam_max": settings.dlam_max, "max_points": settings.max_points, "locate": settings.locate},
+        "reason": branch.reason,
+        "counts": {"points": len(branch), "stable": n_stable, "unstable": len(branch) - n_stable,
+                   "special": len(rows), **{k: sum(1 for d in rows if d["type"] == k) for k in ("LPC", "PD", "NS")}},
+        "lam_first": float(branch.lam[0]) if len(branch) else None,
+        "lam_last": float(branch.lam[-1]) if len(branch) else None,
+        "components": {"names": ["x_j", "y_j", "x_d", "y_d"][:len(comps)], "state_indices": comps},
+        "special": rows,
+        "files": ["branch.npz", "branch.json", "cycles.json"] + figures,
+        "timings_s": {"setup": t1 - t0, "continuation": t_cont, "figures": t_fig,
+                      "total": time.perf_counter() - t0},
+    }
+    write_json(out / "cycles.json", data)
+    print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
+          flush=True)
+    return 0 if ok else 1

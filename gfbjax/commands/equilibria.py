@@ -1,0 +1,184 @@
+"""``gfbjax equilibria``: continuation of the static equilibria of the balanced rotor in the speed Omega_bar, with
+the eigenvalues of the Jacobian and the Hopf (onset of self-excited whirl) and fold points (paper Sect. 3.1)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from typing import Any
+
+from ..params import ParameterError
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json
+
+NAME = "equilibria"
+
+DESCRIPTION = """\
+Continuation of the static equilibrium of the balanced rotor (no unbalance) over a speed range by
+pseudo-arclength steps, with the eigenvalues of the Jacobian at every point; Hopf points (a complex pair crossing
+the imaginary axis: onset of the self-excited sub-synchronous whirl, where the self-excited cycles start) and
+folds are detected and located (unless --no-locate).
+
+Writes to --out: branch.npz + branch.json (gfbjax.cont.Branch.load; plain numpy + json), equilibria.json
+(the Hopf/fold points: Omega_bar, rpm, the Hopf frequency omega per tau and in Hz and the whirl ratio
+omega/Omega_bar; why the branch ended; timings) and equilibria.png (journal position and the real part of the
+critical eigenvalue against speed).
+Exit status: 0 when the branch reached --end, 1 when it ended early, 2 for invalid input.
+"""
+
+EPILOG = """\
+units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); eigenvalues per tau = t/t*;
+positions over the clearance c.
+
+examples:
+  gfbjax equilibria                               reference system, Omega_bar 0.05 -> 1.0
+  gfbjax equilibria --nx 24 --nz 3 --start 0.1 --end 2
+"""
+
+_FIELDS = {"ds": "--ds", "ds_max": "--ds-max", "max_points": "--max-points", "lam_min": "--start",
+           "lam_max": "--end", "ds_min": "--ds"}
+
+
+def register(subparsers: Any) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(NAME, help="equilibria of the balanced rotor vs speed: eigenvalues, Hopf/fold points",
+                              description=DESCRIPTION, epilog=EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_system_options(p, NAME)
+    r = p.add_argument_group("speed range")
+    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
+    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    n = p.add_argument_group("numerics")
+    n.add_argument("--ds", type=float, default=0.05, help="initial arclength step (default 0.05)")
+    n.add_argument("--ds-max", type=float, default=0.5, help="largest arclength step (default 0.5)")
+    n.add_argument("--max-points", type=int, default=200, metavar="P", help="most points (default 200)")
+    n.add_argument("--no-locate", action="store_true", help="do not locate the Hopf/fold points")
+    o = p.add_argument_group("output")
+    o.add_argument("--no-figures", action="store_true", help="no PNG figure")
+    o.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=run)
+    return p
+
+
+def _settings(args: argparse.Namespace):
+    from ..cont import EquilibriumSettings
+
+    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    if args.start == args.end:
+        raise ParameterError("--end must differ from --start")
+    check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
+    check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
+    if args.ds_max < args.ds:
+        raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
+    check_option("--max-points", args.max_points, 2, 10**6, what="points")
+    try:
+        return EquilibriumSettings(ds=args.ds, ds_max=args.ds_max, max_points=args.max_points,
+                                   locate=not args.no_locate)
+    except ValueError as exc:
+        msg = str(exc)
+        opt = _FIELDS.get(msg.split()[0] if msg else "", "numerics")
+        raise ParameterError(f"{opt}: {msg}") from None
+
+
+def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
+    import numpy as np
+
+    out = []
+    for s in branch.special:
+        lam = float(s["lam"])
+        d: dict[str, Any] = {"type": s["type"], "Omega_bar": lam, "rpm": spec.rpm(lam),
+                             "located": bool(s.get("located", False)), "index": s.get("index")}
+        ev = s.get("multipliers")
+        if ev is not None:
+            ev = np.asarray(ev, complex)
+            d["max_real_part"] = float(ev.real.max()) if ev.size else None
+        if s["type"] == "HOPF" and s.get("angle") is not None:
+            w = float(s["angle"])
+            d["omega_per_tau"] = w
+            d["frequency_hz"] = w / spec.t_star / (2 * math.pi)
+            d["whirl_ratio"] = w / lam
+            d["running_frequency_hz"] = lam / spec.t_star / (2 * math.pi)
+        out.append(d)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import gfbjax
+
+    from ..cycles import continue_gfb_equilibria
+
+    from .cycles import reached_end
+
+    t0 = time.perf_counter()
+    spec = spec_from_args(args)
+    settings = _settings(args)
+    out = output_dir(args)
+    params = traced_params(spec)
+    print(f"gfbjax equilibria: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, Omega_bar {args.start:g} -> "
+          f"{args.end:g}", flush=True)
+
+    def cb(i, rec):
+        if not args.quiet and (i % 10 == 0):
+            print(f"  point {i + 1:4d}  Omega_bar = {float(rec.lam):.4f}  "
+                  f"max Re lambda = {float(np.max(np.asarray(rec.multipliers).real)):+.3e}", flush=True)
+        return None
+
+    t1 = time.perf_counter()
+    try:
+        branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb)
+    except RuntimeError as exc:
+        print(f"gfbjax equilibria: {exc}", flush=True)
+        return 1
+    t_cont = time.perf_counter() - t1
+    branch.save(out / "branch")
+    ok = reached_end(branch, args.start, args.end)
+    rows = special_summary(branch, spec)
+    n_stable = int(np.sum(branch.stable))
+    lines = [
+        f"  branch            {len(branch)} points ({n_stable} stable), Omega_bar "
+        f"{float(branch.lam[0]) if len(branch) else math.nan:.4f} -> "
+        f"{float(branch.lam[-1]) if len(branch) else math.nan:.4f}",
+        f"  ended             {branch.reason}" + ("" if ok else "  (before the end of the range)"),
+        f"  time              continuation {t_cont:.1f} s",
+    ]
+    if not rows:
+        lines.append("  special points    none")
+    for d in rows:
+        extra = ""
+        if "omega_per_tau" in d:
+            extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
+                     f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
+        lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}")
+    print("\n".join(lines), flush=True)
+
+    figures: list[str] = []
+    if not args.no_figures and len(branch):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from ..plot_branch import plot_equilibria
+
+        fig = plot_equilibria(branch, title=f"Equilibria of the balanced rotor, system '{args.system}'",
+                              path=out / "equilibria.png")
+        plt.close(fig)
+        figures.append("equilibria.png")
+
+    data = {
+        "command": NAME, "gfbjax_version": gfbjax.__version__,
+        "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
+        "range": {"start": args.start, "end": args.end, "reached_end": ok},
+        "reason": branch.reason,
+        "counts": {"points": len(branch), "stable": n_stable, "HOPF": sum(d["type"] == "HOPF" for d in rows),
+                   "FOLD": sum(d["type"] == "FOLD" for d in rows)},
+        "special": rows,
+        "files": ["branch.npz", "branch.json", "equilibria.json"] + figures,
+        "timings_s": {"setup": t1 - t0, "continuation": t_cont, "total": time.perf_counter() - t0},
+    }
+    write_json(out / "equilibria.json", data)
+    print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
+          flush=True)
+    return 0 if ok else 1

@@ -1,0 +1,192 @@
+"""Figures of continuation branches (:class:`gfbjax.cont.Branch`): the bifurcation diagram of limit cycles (max and
+min of the journal displacements against speed, stable solid / unstable dashed, special points marked), the
+Floquet multipliers in the complex plane with the unit circle, and the equilibrium branch of the balanced rotor
+(journal position and critical eigenvalue real part against speed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+__all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "SPECIAL_STYLE"]
+
+# marker, colour of each special-point type
+SPECIAL_STYLE = {"NS": ("D", "tab:purple"), "PD": ("s", "tab:orange"), "LPC": ("^", "tab:green"),
+                 "HOPF": ("*", "tab:red"), "FOLD": ("^", "tab:green"), "BP": ("o", "k")}
+
+
+def _save(fig, path):
+    if path is not None:
+        fig.savefig(Path(path), dpi=130, bbox_inches="tight")
+    return fig
+
+
+def _segments(x: np.ndarray, y: np.ndarray, mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Runs of consecutive points where ``mask`` holds, each extended by one point on either side so that stable
+    and unstable pieces join."""
+    out = []
+    n = len(x)
+    i = 0
+    while i < n:
+        if mask[i]:
+            j = i
+            while j + 1 < n and mask[j + 1]:
+                j += 1
+            a, b = max(i - 1, 0), min(j + 1, n - 1)
+            out.append((x[a:b + 1], y[a:b + 1]))
+            i = j + 1
+        else:
+            i += 1
+    return out
+
+
+def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:
+    """Each special point with the row of the branch arrays it sits on (None when not stored)."""
+    rows = []
+    for s in branch.special:
+        idx = s.get("index")
+        row = None
+        if idx is not None and 0 <= int(idx) < len(branch.lam):
+            row = int(idx)
+            if not s.get("located", False) or abs(float(branch.lam[row]) - float(s["lam"])) > 1e-9:
+                # not inserted: the nearest point in speed
+                row = int(np.argmin(np.abs(np.asarray(branch.lam) - float(s["lam"]))))
+        elif len(branch.lam):
+            row = int(np.argmin(np.abs(np.asarray(branch.lam) - float(s["lam"]))))
+        rows.append((s, row))
+    return rows
+
+
+def plot_bifurcation(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
+                     c_um: float | None = None, title: str | None = None, path: str | Path | None = None):
+    """Bifurcation diagram of a cycle branch: max and min over the cycle of the journal vertical (top) and
+    horizontal (bottom) displacement against Omega_bar; stable solid, unstable dashed; special points marked.
+
+    ``columns`` are the columns of ``branch.xmax`` holding ``names`` (the recorded rotor components are
+    x_j, y_j[, x_d, y_d])."""
+    import matplotlib.pyplot as plt
+
+    lam = np.asarray(branch.lam, float)
+    order = np.arange(len(lam))  # keep the branch order (folds)
+    stable = np.asarray(branch.stable, bool)
+    col_of = dict(zip(names, columns))
+    panels = [("y_j", "vertical $y_j/c$"), ("x_j", "horizontal $x_j/c$")]
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    rows = _special_rows(branch)
+    for ax, (name, label) in zip(axes, panels):
+        k = col_of[name]
+        for arr, colour, ext in ((branch.xmax, "tab:red", "max"), (branch.xmin, "tab:blue", "min")):
+            v = np.asarray(arr, float)[order, k]
+            first = True
+            for xs, ys in _segments(lam, v, stable):
+                ax.plot(xs, ys, "-", color=colour, lw=1.6, label=f"{ext} (stable)" if first else None)
+                first = False
+            first = True
+            for xs, ys in _segments(lam, v, ~stable):
+                ax.plot(xs, ys, "--", color=colour, lw=1.2, label=f"{ext} (unstable)" if first else None)
+                first = False
+        seen = set()
+        for s, row in rows:
+            if row is None:
+                continue
+            mk, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
+            for arr in (branch.xmax, branch.xmin):
+                ax.plot(float(s["lam"]), float(np.asarray(arr)[row, k]), mk, color=colour, ms=8, mec="k",
+                        label=s["type"] if s["type"] not in seen else None, zorder=5)
+                seen.add(s["type"])
+            ax.annotate(f"{s['type']} {float(s['lam']):.4f}", (float(s["lam"]), float(np.asarray(branch.xmax)[row, k])),
+                        textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
+        ax.set_ylabel(label + (f"  (c = {c_um:.1f} um)" if c_um else ""))
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="best", fontsize=7, ncol=2)
+    axes[1].set_xlabel(r"speed $\bar\Omega$")
+    fig.suptitle(title or "Limit cycles: bifurcation diagram")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_multipliers(branch: Any, *, n_show: int | None = 8, title: str | None = None,
+                     path: str | Path | None = None):
+    """Floquet multipliers of every point of a cycle branch in the complex plane with the unit circle, coloured
+    by Omega_bar; the multipliers of the special points are ringed.  ``n_show``: the largest in modulus per point
+    (None: all)."""
+    import matplotlib.pyplot as plt
+
+    lam = np.asarray(branch.lam, float)
+    mu = np.asarray(branch.multipliers)
+    if n_show is not None:
+        mu = mu[:, :n_show]
+    fig, ax = plt.subplots(figsize=(6.8, 6))
+    th = np.linspace(0, 2 * np.pi, 400)
+    ax.plot(np.cos(th), np.sin(th), "k-", lw=0.8, label="unit circle")
+    if mu.size:
+        cc = np.repeat(lam[:, None], mu.shape[1], axis=1)
+        sc = ax.scatter(mu.real.ravel(), mu.imag.ravel(), c=cc.ravel(), s=9, cmap="viridis")
+        fig.colorbar(sc, ax=ax, label=r"speed $\bar\Omega$")
+    for s in branch.special:
+        m = s.get("multipliers")
+        if m is None:
+            continue
+        m = np.asarray(m)
+        if m.ndim == 2:  # [re, im] pairs from JSON
+            m = m[:, 0] + 1j * m[:, 1]
+        m = m[:n_show] if n_show is not None else m
+        _, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
+        ax.scatter(m.real, m.imag, s=70, facecolors="none", edgecolors=colour, lw=1.5,
+                   label=f"{s['type']} at {float(s['lam']):.4f}")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(r"Re $\mu$")
+    ax.set_ylabel(r"Im $\mu$")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", fontsize=7)
+    ax.set_title(title or "Floquet multipliers")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def critical_real_part(branch: Any) -> np.ndarray:
+    """Largest real part of the eigenvalues at each point of an equilibrium branch."""
+    ev = np.asarray(branch.multipliers)
+    return ev.real.max(axis=1) if ev.size else np.zeros(0)
+
+
+def plot_equilibria(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
+                    title: str | None = None, path: str | Path | None = None):
+    """Equilibrium branch of the balanced rotor: journal position (x_j, y_j over c) and the real part of the
+    critical eigenvalue against Omega_bar (stable solid, unstable dashed), Hopf and fold points marked."""
+    import matplotlib.pyplot as plt
+
+    lam = np.asarray(branch.lam, float)
+    stable = np.asarray(branch.stable, bool)
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    colours = ("tab:blue", "tab:red")
+    for name, k, colour in zip(names, columns, colours):
+        v = np.asarray(branch.xmax, float)[:, k]
+        for i, (xs, ys) in enumerate(_segments(lam, v, stable)):
+            axes[0].plot(xs, ys, "-", color=colour, lw=1.6, label=f"${name[0]}_j/c$ (stable)" if i == 0 else None)
+        for i, (xs, ys) in enumerate(_segments(lam, v, ~stable)):
+            axes[0].plot(xs, ys, "--", color=colour, lw=1.2, label=f"${name[0]}_j/c$ (unstable)" if i == 0 else None)
+    re = critical_real_part(branch)
+    axes[1].plot(lam, re, "-", color="k", lw=1.4, label=r"max Re $\lambda$")
+    axes[1].axhline(0.0, color="0.5", lw=0.8)
+    for s, row in _special_rows(branch):
+        if row is None:
+            continue
+        mk, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
+        lab = f"{s['type']} {float(s['lam']):.4f}"
+        for name, k in zip(names, columns):
+            axes[0].plot(float(s["lam"]), float(np.asarray(branch.xmax)[row, k]), mk, color=colour, ms=10, mec="k")
+        axes[0].annotate(lab, (float(s["lam"]), float(np.asarray(branch.xmax)[row, columns[-1]])),
+                         textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
+        axes[1].plot(float(s["lam"]), float(re[row]), mk, color=colour, ms=10, mec="k", label=lab)
+    axes[0].set_ylabel("journal position over c")
+    axes[1].set_ylabel(r"critical eigenvalue Re $\lambda$ (per $\tau$)")
+    axes[1].set_xlabel(r"speed $\bar\Omega$")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize=7)
+    fig.suptitle(title or "Equilibria of the balanced rotor")
+    fig.tight_layout()
+    return _save(fig, path)

@@ -1,0 +1,83 @@
+"""``gfbjax cycles`` and ``gfbjax equilibria``: help texts, input errors (exit 2 naming the option) and one tiny
+cycle continuation end to end (branch.npz/json, cycles.json and figures)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from gfbjax.cli import main
+
+TINY = ["--nx", "16", "--nz", "2", "--N", "8", "--m", "3"]
+
+
+def _run(argv, capsys):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cycles_help_lists_options(capsys):
+    code, out, _ = _run(["cycles", "--help"], capsys)
+    assert code == 0
+    for opt in ["--system", "--set", "--nx", "--nz", "--out", "--start", "--end", "--m", "--N", "--ds",
+                "--ds-max", "--dlam-max", "--max-points", "--no-locate", "--no-figures", "--quiet"]:
+        assert opt in out, opt
+
+
+def test_equilibria_help_lists_options(capsys):
+    code, out, _ = _run(["equilibria", "--help"], capsys)
+    assert code == 0
+    for opt in ["--system", "--nx", "--out", "--start", "--end", "--ds", "--ds-max", "--max-points", "--no-locate"]:
+        assert opt in out, opt
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["--m", "9"], "--m"),
+    (["--m", "1"], "--m"),
+    (["--N", "1"], "--N"),
+    (["--start", "-1"], "--start"),
+    (["--end", "0"], "--end"),
+    (["--start", "0.3", "--end", "0.3"], "--end"),
+    (["--ds", "0"], "--ds"),
+    (["--ds", "5", "--ds-max", "1"], "--ds-max"),
+    (["--dlam-max", "-0.1"], "--dlam-max"),
+    (["--max-points", "1"], "--max-points"),
+    (["--nx", "4"], "Nx"),
+    (["--m", "abc"], "--m"),
+])
+def test_cycles_bad_input_exits_2(argv, option, capsys, tmp_path):
+    code, out, err = _run(["cycles", *argv, "--out", str(tmp_path)], capsys)
+    assert code == 2
+    assert option in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("argv, option", [(["--start", "-1"], "--start"), (["--ds", "-1"], "--ds")])
+def test_equilibria_bad_input_exits_2(argv, option, capsys, tmp_path):
+    code, _, err = _run(["equilibria", *argv, "--out", str(tmp_path)], capsys)
+    assert code == 2 and option in err
+
+
+def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
+    out = tmp_path / "cyc"
+    code, stdout, _ = _run(["cycles", *TINY, "--start", "0.2", "--end", "0.3", "--dlam-max", "0.05",
+                            "--max-points", "6", "--quiet", "--out", str(out)], capsys)
+    assert code in (0, 1)
+    for name in ["branch.npz", "branch.json", "cycles.json", "cycles_bifurcation.png", "cycles_multipliers.png"]:
+        assert (out / name).is_file(), name
+        assert (out / name).stat().st_size > 0, name
+    meta = json.loads((out / "branch.json").read_text())  # plain json, no gfbjax
+    assert meta["kind"] == "cycles" and isinstance(meta["special"], list)
+    with np.load(out / "branch.npz") as z:
+        lam = z["lam"]
+        assert z["xmax"].shape[0] == lam.size >= 2
+        assert z["multipliers"].shape[0] == lam.size
+    summary = json.loads((out / "cycles.json").read_text())
+    assert summary["counts"]["points"] == lam.size
+    assert summary["reason"] == meta["reason"]
+    assert summary["range"]["reached_end"] == (code == 0)
+    assert set(summary["timings_s"]) >= {"continuation", "total"}
+    assert "special points" in stdout
