@@ -25,11 +25,13 @@ import numpy as np
 
 from . import cont
 from .model import core_rates, layout, vector_field
+from .model.pattern import jacobian_sparsity
 from .params import ParameterError, Params
 from .static import StaticResult, solve_equilibrium
 
-__all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem", "linear_response_start",
-           "rotor_components", "continue_gfb_cycles", "continue_gfb_equilibria"]
+__all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
+           "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "rotor_components",
+           "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles"]
 
 JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
 
@@ -51,10 +53,21 @@ def rotor_components(params: Params, oscillator: bool = True) -> list[int]:
 
 
 def gfb_cycle_problem(params: Params) -> cont.CycleProblem:
-    """Periodic orbits of the autonomous unbalanced system, Eq. (21), in Omega_bar (one trivial multiplier)."""
+    """Periodic orbits of the autonomous unbalanced system, Eq. (21), in Omega_bar (one trivial multiplier).
+
+    The problem carries the Jacobian's sparsity pattern: on fine grids the continuation uses the sparse
+    per-interval LU of :mod:`gfbjax.cont.sparse_colloc` (``CycleSettings.linear_solver='auto'``)."""
     lay = layout(params, oscillator=True)
     return cont.CycleProblem(f=_f_cycles, n=lay.n, args=params, n_trivial=1,
-                             record=rotor_components(params, True))
+                             record=rotor_components(params, True), jac_sparsity=jacobian_sparsity(params))
+
+
+def gfb_self_excited_problem(params: Params) -> cont.CycleProblem:
+    """Periodic orbits of the *balanced* core system (no oscillator): the self-excited whirl cycles that emanate
+    from a Hopf point of the equilibria (paper Table 1), in Omega_bar; period unknown, one trivial multiplier."""
+    lay = layout(params, oscillator=False)
+    return cont.CycleProblem(f=_f_equilibria, n=lay.n, args=params, n_trivial=1,
+                             record=rotor_components(params, False), jac_sparsity=jacobian_sparsity(params, False))
 
 
 def gfb_equilibrium_problem(params: Params) -> cont.EquilibriumProblem:
@@ -97,7 +110,7 @@ def default_cycle_settings(**changes: Any) -> cont.CycleSettings:
     unit speed (2500 at Omega_bar = 0.05): steps are large in that metric (``ds`` up to 20) and the speed change
     per step is capped by ``dlam_max`` instead.
     """
-    base = dict(m=4, N=16, ds=0.5, ds_min=1e-4, ds_max=20.0, dlam_max=0.02, max_points=200)
+    base = dict(m=4, N=16, ds=10.0, ds_min=1e-4, ds_max=20.0, dlam_max=0.02, max_points=200)
     base.update(changes)
     return cont.CycleSettings(**base)
 
@@ -134,6 +147,21 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     x_of_t, T, _ = linear_response_start(params, omega_start)
     start = cont.start_from_function(x_of_t, T, omega_start, settings)
     return cont.continue_cycles(gfb_cycle_problem(params), settings, start, progress=progress, callback=callback)
+
+
+def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int = 0,
+                             settings: cont.CycleSettings | None = None, *, progress: bool = False,
+                             callback: Callable[[int, Any], Any] | None = None) -> cont.Branch:
+    """Self-excited cycles from the ``which``-th Hopf point of an equilibrium branch (:func:`continue_gfb_equilibria`).
+
+    The branch leaves the Hopf point along its first harmonic; toward higher speed with stable cycles when the
+    Hopf bifurcation is supercritical, toward lower speed with unstable ones when it is subcritical (the sign of
+    ``Branch.tangent_lam`` on the first points tells which).  ``settings.lam_min``/``lam_max`` bound the speed."""
+    settings = settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=80)
+    hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
+    start = cont.start_from_hopf(hp, settings)
+    return cont.continue_cycles(gfb_self_excited_problem(params), settings, start, progress=progress,
+                                callback=callback)
 
 
 def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float,

@@ -53,6 +53,7 @@ import lineax as lx
 import optimistix as optx
 from jax import Array
 
+from .cont.sparsity import color_pattern
 from .model import film, layout, runup_vector_field
 from .params import ParameterError, Params
 
@@ -317,7 +318,7 @@ class JacobianColoring:
     n: int
     color: tuple[int, ...]          # colour of each column
     n_colors: int
-    rows: tuple[int, ...]           # structural non-zeros (row, col) outside the dense rows
+    rows: tuple[int, ...]           # structural non-zeros (row, col); dense-row entries are overwritten by VJPs
     cols: tuple[int, ...]
     dense_rows: tuple[int, ...]
 
@@ -329,40 +330,16 @@ class JacobianColoring:
 
 @functools.lru_cache(maxsize=16)
 def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float) -> JacobianColoring:
-    from .model import layout as _layout
+    from .model.pattern import jacobian_sparsity
     from .params import reference_system
 
-    spec = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width)
-    params = as_traced(spec.nondim())
-    lay = _layout(params)
-    n = lay.n_core
-    rng = np.random.default_rng(12345)
-    jac = jax.jit(jax.jacfwd(lambda y, t, w, a: runup_vector_field(t, y, params, w, a)))
-    pat = np.eye(n, dtype=bool)
-    for k in range(3):  # union over random states with open film and every gauge pressure positive
-        y = np.concatenate([rng.uniform(1.1, 2.0, lay.grid.n_pressure), rng.uniform(0.01, 0.2, lay.n_foil),
-                            rng.uniform(-0.3, 0.3, lay.n_rotor)])
-        pat |= np.asarray(jac(jnp.asarray(y), 1.0 + k, 0.3 + 0.2 * k, 1e-3)) != 0
-    nnz = pat.sum(axis=1)
-    dense_rows = np.where(nnz > max(16, n // 4))[0]
-    sp = pat.copy()
-    sp[dense_rows] = False
-    color = -np.ones(n, dtype=int)
-    used: list[np.ndarray] = []
-    for c in np.argsort(-sp.sum(axis=0), kind="stable"):
-        col = sp[:, c]
-        for k, u in enumerate(used):
-            if not (u & col).any():
-                color[c] = k
-                u |= col
-                break
-        else:
-            color[c] = len(used)
-            used.append(col.copy())
-    r, c = np.nonzero(sp)
-    return JacobianColoring(n=n, color=tuple(int(v) for v in color), n_colors=len(used),
-                            rows=tuple(int(v) for v in r), cols=tuple(int(v) for v in c),
-                            dense_rows=tuple(int(v) for v in dense_rows))
+    params = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width).nondim()
+    pat = jacobian_sparsity(params, oscillator=False)
+    n = pat.shape[0]
+    c = color_pattern(pat)
+    return JacobianColoring(n=n, color=tuple(int(v) for v in c.color), n_colors=c.n_colors,
+                            rows=tuple(int(v) for v in c.rows), cols=tuple(int(v) for v in c.cols),
+                            dense_rows=tuple(int(v) for v in c.dense_rows))
 
 
 def jacobian_coloring(params: Params) -> JacobianColoring:

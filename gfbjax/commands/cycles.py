@@ -56,7 +56,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     n.add_argument("--m", type=int, default=4, metavar="M",
                    help="collocation points per mesh interval, 2..7 (default 4)")
     n.add_argument("--N", type=int, default=16, metavar="N", help="collocation mesh intervals, >= 2 (default 16)")
-    n.add_argument("--ds", type=float, default=0.5, help="initial arclength step (default 0.5)")
+    n.add_argument("--ds", type=float, default=10.0, help="initial arclength step (default 10; the first speed "
+                   "step is also capped by --dlam-max)")
     n.add_argument("--ds-max", type=float, default=20.0, help="largest arclength step (default 20)")
     n.add_argument("--dlam-max", type=float, default=0.02, metavar="DLAM",
                    help="largest change of Omega_bar in one step (default 0.02)")
@@ -168,9 +169,10 @@ class _SpeedBar:
             return None
         lam = float(rec.lam)
         frac = min(max((lam - self.start) / (self.end - self.start), 0.0), 1.0) * abs(self.end - self.start)
-        if frac > self.done:
-            self.bar.update(round(frac - self.done, 6))
-            self.done = frac
+        if frac > self.done:  # set the position (not increments) so that rounding never overshoots the total
+            self.done = min(round(frac, 6), self.bar.total)
+            self.bar.n = self.done
+            self.bar.refresh()
         self.bar.set_postfix_str(f"Omega_bar={lam:.4f}, point {index + 1}, {'stable' if rec.stable else 'unstable'}",
                                  refresh=False)
         return None

@@ -1,9 +1,11 @@
 """Generic numerical continuation (equilibria and periodic orbits) in JAX.
 
 Knows nothing about bearings: works for any autonomous ``f(x, lam, args)``.
-See ``collocation`` (periodic BVP, condensation of parameters), ``floquet``
-(stable product eigenvalues), ``palc`` (cycle continuation), ``equilibria``,
-``events`` and ``branch`` (results, npz + JSON storage).
+See ``collocation`` (periodic BVP, condensation of parameters), ``sparse_colloc``
+(the same Newton system for large sparse fields: per-interval sparse LU, GMRES,
+Arnoldi multipliers; chosen by ``CycleSettings.linear_solver``), ``sparsity``
+(coloured Jacobians), ``floquet`` (stable product eigenvalues), ``palc`` (cycle
+continuation), ``equilibria``, ``events`` and ``branch`` (results, npz + JSON storage).
 
 XLA:CPU workaround: with jax/jaxlib 0.10 the compiled Newton kernel (scan +
 LAPACK QR + small dots) can dead-lock at run time under XLA:CPU's
@@ -26,8 +28,10 @@ from .collocation import (Constraint, NewtonResult, Orbit, Scheme, dense_newton_
 from .equilibria import EquilibriumSettings, HopfPoint, continue_equilibria, hopf_point
 from .floquet import (PeriodicQRResult, multipliers_periodic, multipliers_product, nontrivial,
                       trivial_error)
-from .palc import (CycleSettings, CycleStart, analyse, continue_cycles, start_from_branch,
-                   start_from_function, start_from_hopf, start_from_pd, start_from_samples)
+from .palc import (CycleSettings, CycleStart, DenseBackend, analyse, continue_cycles, make_backend,
+                   start_from_branch, start_from_function, start_from_hopf, start_from_pd, start_from_samples)
+from .sparse_colloc import SparseCollocation
+from .sparsity import Coloring, color_pattern, jacobian_values
 from .problem import CycleProblem, EquilibriumProblem
 
 __all__ = [
@@ -37,5 +41,6 @@ __all__ = [
     "continue_equilibria", "hopf_point", "PeriodicQRResult", "multipliers_periodic",
     "multipliers_product", "nontrivial", "trivial_error", "CycleSettings", "CycleStart", "analyse",
     "continue_cycles", "start_from_branch", "start_from_function", "start_from_hopf", "start_from_pd",
-    "start_from_samples", "CycleProblem", "EquilibriumProblem",
+    "start_from_samples", "CycleProblem", "EquilibriumProblem", "DenseBackend", "make_backend",
+    "SparseCollocation", "Coloring", "color_pattern", "jacobian_values",
 ]

@@ -44,6 +44,9 @@ class CycleSettings:
     ds: initial step (> 0); direction: +1/-1 initial orientation in lam.
     dlam_max: largest *predicted* change of lam in one step (caps ds when the tangent is nearly
     orthogonal to lam in the arclength metric; the corrector may move lam further; inf = no cap).
+    linear_solver: "dense" (condensation of parameters, all n multipliers), "sparse" (per-interval sparse LU,
+    GMRES and Arnoldi, the ``n_multipliers`` largest multipliers; needs ``problem.jac_sparsity``) or "auto"
+    (sparse when the problem has a pattern and n >= SPARSE_MIN_N).
     """
 
     m: int = 4
@@ -68,6 +71,8 @@ class CycleSettings:
     locate_tol: float = 1e-8
     floquet: str = "periodic"
     save_states: bool = False
+    linear_solver: str = "auto"
+    n_multipliers: int = 12
 
     def __post_init__(self) -> None:
         check_range("m", self.m, 2, 7, integer=True)
@@ -92,6 +97,9 @@ class CycleSettings:
         check_range("locate_tol", self.locate_tol, 0.0, 1.0, lo_open=True)
         if self.floquet not in ("periodic", "product"):
             raise ValueError(f"floquet must be 'periodic' or 'product', got {self.floquet!r}")
+        if self.linear_solver not in ("auto", "dense", "sparse"):
+            raise ValueError(f"linear_solver must be 'auto', 'dense' or 'sparse', got {self.linear_solver!r}")
+        check_range("n_multipliers", self.n_multipliers, 1, 10**6, integer=True)
 
 
 @dataclass(frozen=True)
@@ -151,21 +159,61 @@ def start_from_branch(branch: Branch, index: int) -> CycleStart:
     return CycleStart(o, None, f"branch[{index}]")
 
 
-def start_from_pd(problem: CycleProblem, branch: Branch, special: int | dict) -> CycleStart:
-    """Switch onto the period-doubled branch at a located PD point of ``branch``."""
+def start_from_pd(problem: CycleProblem, branch: Branch, special: int | dict,
+                  settings: "CycleSettings | None" = None) -> CycleStart:
+    """Switch onto the period-doubled branch at a located PD point of ``branch`` (transfer matrices from the
+    backend that ``settings`` selects)."""
     sp_list = branch.special_of("PD") if isinstance(special, int) else [special]
     sp = sp_list[special] if isinstance(special, int) else special
     st = branch.special_states[sp["state"]]
     sch = col.Scheme(int(branch.m))
     o = col.Orbit(jnp.asarray(st["mesh"]), jnp.asarray(st["xm"]), jnp.asarray(st["xi"]),
                   jnp.asarray(st["T"]), jnp.asarray(st["lam"]))
-    G = _transfer(problem.f, problem.args, o, sch)
+    G = make_backend(problem, sch, settings).transfer_matrices(o)
     doubled, direction = double_orbit_pd(problem.f, problem.args, o, sch, np.asarray(G))
     return CycleStart(doubled, direction, "PD switch")
 
 
 # ---------------------------------------------------------------- helpers
 _transfer = jax.jit(col.transfer_matrices, static_argnums=(0, 3))
+
+SPARSE_MIN_N = 150  # below this the dense condensation is as fast and gives all n multipliers
+
+
+class DenseBackend:
+    """Linear algebra by dense condensation of parameters (``collocation.py``); all n multipliers."""
+
+    def __init__(self, problem: CycleProblem, scheme: col.Scheme, floquet: str = "periodic"):
+        self.problem, self.scheme, self.floquet = problem, scheme, floquet
+
+    def newton(self, orbit, con, **kw) -> col.NewtonResult:
+        return col.newton(self.problem.f, self.problem.args, orbit, con, self.scheme, **kw)
+
+    def multipliers(self, orbit: col.Orbit) -> np.ndarray:
+        G = np.asarray(_transfer(self.problem.f, self.problem.args, orbit, self.scheme))
+        if self.floquet == "periodic":
+            return multipliers_periodic(G).multipliers
+        mu = multipliers_product(G)
+        return mu[np.argsort(-np.abs(mu))]
+
+    def transfer_matrices(self, orbit: col.Orbit) -> np.ndarray:
+        return np.asarray(_transfer(self.problem.f, self.problem.args, orbit, self.scheme))
+
+
+def make_backend(problem: CycleProblem, scheme: col.Scheme, settings: "CycleSettings | None" = None):
+    """The linear-algebra backend for ``problem`` (see ``CycleSettings.linear_solver``)."""
+    s = settings or CycleSettings()
+    choice = s.linear_solver
+    if choice == "auto":
+        choice = "sparse" if problem.jac_sparsity is not None and problem.n >= SPARSE_MIN_N else "dense"
+    if choice == "sparse":
+        if problem.jac_sparsity is None:
+            raise ValueError("linear_solver='sparse' needs CycleProblem.jac_sparsity (the pattern of df/dx)")
+        from .sparse_colloc import SparseCollocation
+
+        return SparseCollocation(problem.f, problem.args, problem.n, problem.jac_sparsity, scheme,
+                                 n_multipliers=s.n_multipliers)
+    return DenseBackend(problem, scheme, s.floquet)
 
 
 @partial(jax.jit, static_argnums=(1,))
@@ -174,14 +222,13 @@ def _norm_and_extrema(orbit: col.Orbit, scheme: col.Scheme, comps: jax.Array):
     return col.l2_norm(orbit, scheme), jnp.max(U, axis=(0, 1)), jnp.min(U, axis=(0, 1))
 
 
-def analyse(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, method: str = "periodic"):
-    """Floquet multipliers (decreasing modulus), stability, trivial-multiplier error."""
-    G = np.asarray(_transfer(problem.f, problem.args, orbit, scheme))
-    if method == "periodic":
-        mu = multipliers_periodic(G).multipliers
-    else:
-        mu = multipliers_product(G)
-        mu = mu[np.argsort(-np.abs(mu))]
+def analyse(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, method: str = "periodic",
+            backend: Any = None):
+    """Floquet multipliers (decreasing modulus), stability, trivial-multiplier error.
+
+    ``backend`` (from :func:`make_backend`) selects the linear algebra; default: dense with ``method``."""
+    backend = backend if backend is not None else DenseBackend(problem, scheme, method)
+    mu = backend.multipliers(orbit)
     nt = nontrivial(mu, problem.n_trivial)
     stable = bool(np.all(np.abs(nt) < 1.0))
     return mu, stable, trivial_error(mu)
@@ -202,9 +249,9 @@ def _orbit_state(orbit: col.Orbit) -> dict[str, np.ndarray]:
             "T": np.asarray(orbit.T), "lam": np.asarray(orbit.lam)}
 
 
-def _correct(problem, settings, scheme, pred: col.Orbit, con: col.Constraint) -> col.NewtonResult:
-    return col.newton(problem.f, problem.args, pred, con, scheme, tol=settings.newton_tol,
-                      rtol_step=settings.newton_step_tol, max_iter=settings.newton_max_iter)
+def _correct(backend, settings, pred: col.Orbit, con: col.Constraint) -> col.NewtonResult:
+    return backend.newton(pred, con, tol=settings.newton_tol, rtol_step=settings.newton_step_tol,
+                          max_iter=settings.newton_max_iter)
 
 
 # ---------------------------------------------------------------- main loop
@@ -231,7 +278,8 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
             bar = None
     shared = {"mesh": np.asarray(start.orbit.mesh)} if settings.save_states else None
     try:
-        reason = _loop(problem, settings, scheme, start, points, special, special_states, callback, bar)
+        backend = make_backend(problem, scheme, settings)
+        reason = _loop(problem, settings, scheme, backend, start, points, special, special_states, callback, bar)
     except KeyboardInterrupt:
         reason = "interrupted"
     except Exception as e:  # never lose the computed branch
@@ -243,17 +291,17 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
                               m=scheme.m, shared_state=shared)
 
 
-def _loop(problem, settings, scheme, start, points, special, special_states, callback, bar) -> str:
+def _loop(problem, settings, scheme, backend, start, points, special, special_states, callback, bar) -> str:
     s = settings
     palc = s.mode == "palc"
     if start.tangent is None:
         con = col.natural_constraint(start.orbit, start.orbit.lam)
-        res = _correct(problem, s, scheme, start.orbit, con)
+        res = _correct(backend, s, start.orbit, con)
         if not res.converged:
             return f"start point did not converge: {res.reason}"
         X = res.orbit
         tau = res.tangent.scale(float(s.direction))
-        mu, stable, terr = analyse(problem, X, scheme, s.floquet)
+        mu, stable, terr = analyse(problem, X, scheme, backend=backend)
         points.append(_record(problem, X, scheme, s, mu, stable, terr, res.iterations, 0.0, tau.lam))
         tests = cycle_test_functions(mu, problem.n_trivial, float(tau.lam))
         if callback is not None and callback(0, points[-1]) is False:
@@ -280,7 +328,7 @@ def _loop(problem, settings, scheme, start, points, special, special_states, cal
             if X_prev is not None:
                 pred = X + (X + X_prev.scale(-1.0)).scale(step / float(X.lam - X_prev.lam))
             con = col.natural_constraint(pred, X.lam + step)
-        res = _correct(problem, s, scheme, pred, con)
+        res = _correct(backend, s, pred, con)
         if not res.converged:
             ds *= 0.5
             if ds < s.ds_min:
@@ -290,12 +338,12 @@ def _loop(problem, settings, scheme, start, points, special, special_states, cal
         tau_n = res.tangent
         if not palc:
             tau_n = tau_n.scale(float(s.direction))
-        mu_n, stable_n, terr_n = analyse(problem, Xn, scheme, s.floquet)
+        mu_n, stable_n, terr_n = analyse(problem, Xn, scheme, backend=backend)
         tests_n = cycle_test_functions(mu_n, problem.n_trivial, float(tau_n.lam))
         # ---- events between X and Xn
         if tests is not None and s.detect:
             for kind in detect(tests, tests_n, s.detect):
-                _handle_event(problem, s, scheme, kind, X, tau if palc else None, ds, tests, tests_n,
+                _handle_event(problem, s, scheme, backend, kind, X, tau if palc else None, ds, tests, tests_n,
                               Xn, mu_n, points, special, special_states)
         rec = _record(problem, Xn, scheme, s, mu_n, stable_n, terr_n, res.iterations, ds, tau_n.lam)
         points.append(rec)
@@ -312,7 +360,7 @@ def _loop(problem, settings, scheme, start, points, special, special_states, cal
     return "max_points reached"
 
 
-def _handle_event(problem, s, scheme, kind, X, tau, ds, tests, tests_n, Xn, mu_n, points, special,
+def _handle_event(problem, s, scheme, backend, kind, X, tau, ds, tests, tests_n, Xn, mu_n, points, special,
                   special_states) -> None:
     """Localise ``kind`` between X (left) and Xn and insert the special point."""
     orbit, mu, located = Xn, mu_n, False
@@ -320,11 +368,11 @@ def _handle_event(problem, s, scheme, kind, X, tau, ds, tests, tests_n, Xn, mu_n
     if s.locate and tau is not None:
         def g(sv):
             con = col.palc_constraint(X, tau, sv, ref=X + tau.scale(sv))
-            r = _correct(problem, s, scheme, X + tau.scale(sv), con)
+            r = _correct(backend, s, X + tau.scale(sv), con)
             if not r.converged:
                 return float("nan"), None
             t = r.tangent
-            m_, _, _ = analyse(problem, r.orbit, scheme, s.floquet)
+            m_, _, _ = analyse(problem, r.orbit, scheme, backend=backend)
             val = cycle_test_functions(m_, problem.n_trivial, float(t.lam))[kind]
             return val, (r, m_, float(t.lam))
 

@@ -9,10 +9,11 @@ whole continuation to avoid re-compilation.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import jax
+import numpy as np
 
 
 def _check_common(f: Any, n: Any, record: Sequence[int] | None) -> None:
@@ -33,7 +34,9 @@ class CycleProblem:
     n_trivial: number of Floquet multipliers that are 1 by construction
     (1 for an autonomous system; more with symmetries / first integrals /
     autonomous forcing oscillators).  record: state components whose max/min
-    over the cycle are stored (None: all).
+    over the cycle are stored (None: all).  jac_sparsity: optional boolean
+    (n, n) pattern of df/dx (True where an entry may be non-zero); with it,
+    large problems use the sparse linear algebra of ``sparse_colloc``.
     """
 
     f: Callable[[jax.Array, jax.Array, Any], jax.Array]
@@ -41,11 +44,15 @@ class CycleProblem:
     args: Any = None
     n_trivial: int = 1
     record: Sequence[int] | None = None
+    jac_sparsity: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         _check_common(self.f, self.n, self.record)
         if not (isinstance(self.n_trivial, int) and 1 <= self.n_trivial <= self.n):
             raise ValueError(f"n_trivial must be an int in [1, n={self.n}], got {self.n_trivial!r}")
+        if self.jac_sparsity is not None and np.shape(self.jac_sparsity) != (self.n, self.n):
+            raise ValueError(f"jac_sparsity must have shape (n, n) = ({self.n}, {self.n}), "
+                             f"got {np.shape(self.jac_sparsity)}")
 
     @property
     def components(self) -> list[int]:

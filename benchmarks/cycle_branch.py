@@ -1,0 +1,104 @@
+"""Benchmark (b): a whole limit-cycle branch of the reference system, Omega_bar 0.05 -> 1.0, on the default grid.
+
+What a user runs with ``gfbjax cycles``: collocation (N=16, m=4), pseudo-arclength steps, Floquet multipliers at
+every point, LPC/PD/NS detection and localisation.  Compilation is measured apart: a first, short branch
+(3 points) compiles every kernel; the timed branch runs after it in the same process.
+
+For the ratio, one Newton linearisation of the dense condensation (``collocation._step_and_tangent``) is timed on
+the same orbit: the cost per Newton iteration a branch would pay without the sparse backend.
+
+Usage:  python benchmarks/cycle_branch.py [--nx 48 --nz 8] [--start 0.05 --end 1.0] [--no-dense]
+Writes benchmarks/results/cycle_branch.json and prints a table.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import gfbjax  # noqa: F401  (process defaults: XLA flags, x64) before any JAX work
+import jax
+import numpy as np
+
+from gfbjax import cont
+from gfbjax.cont import collocation as col
+from gfbjax.cycles import continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem, linear_response_start
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--nx", type=int, default=48)
+    ap.add_argument("--nz", type=int, default=8)
+    ap.add_argument("--start", type=float, default=0.05)
+    ap.add_argument("--end", type=float, default=1.0)
+    ap.add_argument("--dlam-max", type=float, default=0.02)
+    ap.add_argument("--no-dense", action="store_true", help="skip the dense-condensation reference iteration")
+    ap.add_argument("--out", default=str(RESULTS / "cycle_branch.json"))
+    a = ap.parse_args()
+
+    params = gfbjax.reference_system(Nx=a.nx, Nz=a.nz).nondim()
+    prob = gfb_cycle_problem(params)
+    settings = default_cycle_settings(dlam_max=a.dlam_max)
+
+    t0 = time.perf_counter()
+    warm = continue_gfb_cycles(params, a.start, a.end, default_cycle_settings(dlam_max=a.dlam_max, max_points=3))
+    t_compile = time.perf_counter() - t0
+    assert len(warm) == 3, warm.reason
+
+    t0 = time.perf_counter()
+    branch = continue_gfb_cycles(params, a.start, a.end, settings)
+    t_branch = time.perf_counter() - t0
+
+    special = [{"type": s["type"], "Omega_bar": float(s["lam"]), "rpm": gfbjax.reference_system().rpm(float(s["lam"])),
+                "located": bool(s["located"]), "angle": s.get("angle")} for s in branch.special]
+    rec = {
+        "system": "reference", "Nx": a.nx, "Nz": a.nz, "n": prob.n, "N": settings.N, "m": settings.m,
+        "range": [a.start, a.end], "dlam_max": a.dlam_max, "reached": float(branch.lam[-1]), "reason": branch.reason,
+        "points": len(branch), "newton_iterations": int(np.sum(branch.newton_iterations)),
+        "compile_and_first_3_points_s": round(t_compile, 2), "branch_s": round(t_branch, 2),
+        "per_point_s": round(t_branch / len(branch), 3),
+        "max_trivial_error": float(np.max(branch.trivial_error)), "special": special,
+        "machine": {"cpus": os.cpu_count(), "platform": platform.platform()},
+        "versions": {"jax": jax.__version__},
+        "note": "wall times on a shared 2-core machine; other processes may have run at the same time",
+    }
+    if not a.no_dense:
+        x_of_t, T, _ = linear_response_start(params, 0.3)
+        sch = col.Scheme(settings.m)
+        o = col.orbit_from_function(x_of_t, T, 0.3, sch, col.uniform_mesh(settings.N))
+        con = col.natural_constraint(o, 0.3)
+        t0 = time.perf_counter()
+        jax.block_until_ready(col._step_and_tangent(prob.f, prob.args, o, con, sch))
+        tc = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        jax.block_until_ready(col._step_and_tangent(prob.f, prob.args, o, con, sch))
+        rec["dense_iteration_s"] = round(time.perf_counter() - t0, 2)
+        rec["dense_compile_and_first_s"] = round(tc, 2)
+        rec["sparse_iterations_per_point"] = round(rec["newton_iterations"] / len(branch), 2)
+
+    print(f"{'quantity':<44} value")
+    rows = [("grid (n)", f"{a.nx}x{a.nz} ({prob.n})"), ("points", rec["points"]),
+            ("Omega_bar reached", f"{rec['reached']:.4f}"), ("compile + 3 points [s]", rec["compile_and_first_3_points_s"]),
+            ("branch after compilation [s]", rec["branch_s"]), ("per point [s]", rec["per_point_s"]),
+            ("Newton iterations (all points)", rec["newton_iterations"]),
+            ("max |mu_trivial - 1|", f"{rec['max_trivial_error']:.2e}")]
+    rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f} ({s['rpm']:.0f} rpm)") for s in special]
+    if "dense_iteration_s" in rec:
+        rows.append(("dense condensation, one Newton iteration [s]", rec["dense_iteration_s"]))
+        est = rec["dense_iteration_s"] * (rec["newton_iterations"] + len(branch))
+        rec["dense_branch_estimate_s"] = round(est, 1)
+        rows.append(("dense: same branch, lower bound [s]", f"{est:.0f} ({est / t_branch:.0f}x)"))
+    for k, v in rows:
+        print(f"{k:<44} {v}")
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(a.out).write_text(json.dumps(rec, indent=1))
+    print(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()

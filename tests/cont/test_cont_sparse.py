@@ -1,0 +1,143 @@
+"""The sparse linear algebra of ``cont.sparse_colloc`` (per-interval sparse LU, GMRES, Arnoldi) against analytic
+Floquet multipliers and against the dense condensation, on a ring of diffusively coupled Stuart-Landau oscillators.
+
+Ring of K oscillators z_k' = (lam + i w) z_k - |z_k|^2 z_k + D (z_{k+1} - 2 z_k + z_{k-1}): the synchronous cycle
+z_k = sqrt(lam) e^{i w t} has period T = 2 pi / w and, per Fourier mode q = 0..K-1 of the perturbation with
+d_q = 4 D sin^2(pi q / K), the multipliers exp(-(2 lam + d_q) T) (amplitude) and exp(-d_q T) (phase).  The
+Jacobian is sparse (each oscillator couples to its two neighbours), so the problem can carry its pattern.
+"""
+import numpy as np
+import jax.numpy as jnp
+import pytest
+
+from gfbjax import cont
+from gfbjax.cont import collocation as col
+from gfbjax.cont.palc import DenseBackend, make_backend
+from gfbjax.cont.sparse_colloc import SparseCollocation
+from gfbjax.cont.sparsity import color_pattern, jacobian_values
+
+K, LAM, W, D = 80, 0.5, 2 * np.pi, 1.0
+
+
+def ring(x, lam, p):
+    w, d = p[0], p[1]
+    a, b = x[0::2], x[1::2]
+    r2 = a * a + b * b
+    lap = lambda u: jnp.roll(u, 1) - 2 * u + jnp.roll(u, -1)  # noqa: E731
+    da = lam * a - w * b - a * r2 + d * lap(a)
+    db = w * a + lam * b - b * r2 + d * lap(b)
+    return jnp.stack([da, db], axis=1).ravel()
+
+
+def ring_pattern(k):
+    n = 2 * k
+    P = np.zeros((n, n), bool)
+    for i in range(k):
+        for j in (i - 1, i, i + 1):
+            jj = j % k
+            P[2 * i:2 * i + 2, 2 * jj:2 * jj + 2] = True
+    return P
+
+
+def analytic_multipliers(k, lam, w, d):
+    T = 2 * np.pi / w
+    dq = 4 * d * np.sin(np.pi * np.arange(k) / k) ** 2
+    mu = np.concatenate([np.exp(-(2 * lam + dq) * T), np.exp(-dq * T)])
+    return np.sort(mu)[::-1]
+
+
+@pytest.fixture(scope="module")
+def setup():
+    args = jnp.array([W, D])
+    prob = cont.CycleProblem(f=ring, n=2 * K, args=args, jac_sparsity=ring_pattern(K))
+    sch = cont.Scheme(4)
+    r = np.sqrt(LAM)
+    phase = 0.3 * np.sin(2 * np.pi * np.arange(K) / K)  # a perturbed guess: not synchronous
+
+    def x_of_t(t):
+        th = 2 * np.pi * t[:, None] + phase[None, :]
+        return np.stack([1.05 * r * np.cos(th), 0.95 * r * np.sin(th)], axis=2).reshape(len(t), -1)
+
+    guess = col.orbit_from_function(x_of_t, 1.02 * 2 * np.pi / W, LAM, sch, col.uniform_mesh(20))
+    return prob, sch, guess
+
+
+def test_coloring_recovers_jacobian(setup):
+    prob, _, guess = setup
+    x = guess.xm[3]
+    c = color_pattern(prob.jac_sparsity)
+    assert c.n_colors < prob.n // 10
+    J = np.asarray(__import__("jax").jacfwd(lambda y: ring(y, jnp.asarray(LAM), prob.args))(x))
+    vals = np.asarray(jacobian_values(lambda y: ring(y, jnp.asarray(LAM), prob.args), x, c))
+    np.testing.assert_allclose(vals, J[c.rows, c.cols], rtol=0, atol=1e-13)
+    outside = np.ones_like(J, bool)
+    outside[c.rows, c.cols] = False
+    assert np.all(J[outside] == 0.0)
+
+
+def test_sparse_newton_step_equals_dense(setup):
+    prob, sch, guess = setup
+    con = col.natural_constraint(guess, LAM)
+    d_dense = col.newton_step(prob.f, prob.args, guess, con, sch)
+    sp = SparseCollocation(prob.f, prob.args, prob.n, prob.jac_sparsity, sch)
+    rc, rper, rs = (np.asarray(a) for a in col.residual(prob.f, prob.args, guess, con, sch))
+    d_sparse = sp.linearise(guess, con).solve(-rc, -rper, -rs, 1e-12)
+    scale = float(jnp.max(jnp.abs(d_dense.to_flat())))
+    assert scale > 1e-3  # the guess is far enough from the cycle for a real test
+    assert float(jnp.max(jnp.abs(d_sparse.to_flat() - d_dense.to_flat()))) < 1e-9 * scale
+
+
+def test_sparse_cycle_and_multipliers_analytic(setup):
+    prob, sch, guess = setup
+    backend = make_backend(prob, sch)  # auto: n = 160 with a pattern -> sparse
+    assert isinstance(backend, SparseCollocation)
+    res = backend.newton(guess, col.natural_constraint(guess, LAM), tol=1e-10, rtol_step=1e-10)
+    assert res.converged, res.reason
+    o = res.orbit
+    assert float(o.T) == pytest.approx(2 * np.pi / W, rel=1e-9)
+    radius = np.sqrt(np.asarray(o.xm)[:, 0::2] ** 2 + np.asarray(o.xm)[:, 1::2] ** 2)
+    np.testing.assert_allclose(radius, np.sqrt(LAM), atol=1e-7)
+    mu, stable, terr = cont.analyse(prob, o, sch, backend=backend)
+    assert len(mu) == backend.n_multipliers
+    exact = analytic_multipliers(K, LAM, W, D)[: len(mu)]
+    np.testing.assert_allclose(np.sort(np.abs(mu))[::-1], exact, atol=1e-7)
+    assert np.max(np.abs(mu.imag)) < 1e-7
+    assert terr < 1e-9 and stable
+    # the dense condensation at the same orbit: the same leading multipliers
+    mu_dense = DenseBackend(prob, sch).multipliers(o)
+    np.testing.assert_allclose(np.abs(mu_dense[: len(mu)]), np.abs(mu), atol=1e-9)
+
+
+def test_sparse_and_dense_branches_agree():
+    k = 24  # a smaller ring: the dense condensation's cost grows as n^3
+    prob = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, D]), jac_sparsity=ring_pattern(k))
+    sch = cont.Scheme(4)
+    r = np.sqrt(LAM)
+
+    def x_of_t(t):
+        th = 2 * np.pi * t[:, None] + 0.2 * np.sin(2 * np.pi * np.arange(k) / k)[None, :]
+        return np.stack([r * np.cos(th), r * np.sin(th)], axis=2).reshape(len(t), -1)
+
+    guess = col.orbit_from_function(x_of_t, 2 * np.pi / W, LAM, sch, col.uniform_mesh(12))
+    out = {}
+    for solver in ("dense", "sparse"):
+        s = cont.CycleSettings(m=4, N=12, ds=0.05, ds_max=0.05, max_points=4, linear_solver=solver,
+                               n_multipliers=6)
+        b = cont.continue_cycles(prob, s, cont.CycleStart(guess))
+        assert len(b) == 4, b.reason
+        out[solver] = b
+    np.testing.assert_allclose(out["sparse"].lam, out["dense"].lam, atol=1e-9)
+    np.testing.assert_allclose(out["sparse"].l2, out["dense"].l2, atol=1e-9)
+    np.testing.assert_allclose(np.abs(out["sparse"].multipliers), np.abs(out["dense"].multipliers[:, :6]),
+                               atol=1e-8)
+
+
+def test_sparse_requires_pattern(setup):
+    prob, sch, _ = setup
+    with pytest.raises(ValueError, match="jac_sparsity"):
+        cont.CycleProblem(f=ring, n=prob.n, args=prob.args, jac_sparsity=np.ones((3, 3), bool))
+    bare = cont.CycleProblem(f=ring, n=prob.n, args=prob.args)
+    with pytest.raises(ValueError, match="jac_sparsity"):
+        make_backend(bare, sch, cont.CycleSettings(linear_solver="sparse"))
+    with pytest.raises(ValueError, match="linear_solver"):
+        cont.CycleSettings(linear_solver="banded")
