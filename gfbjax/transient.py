@@ -11,17 +11,16 @@ Solver (chosen by measurement): diffrax ``Kvaerno5`` (L-stable ESDIRK, order 5(4
 controller (pcoeff 0.3, icoeff 0.4; a plain I controller rejected half of the steps).  Its Newton iteration is a
 chord method with one Jacobian and one dense LU factorisation (lineax ``LU``) per *step*, reused by all stages
 (diffrax' ``VeryChord`` logic).  The Jacobian is assembled by :class:`ColoredChord` from a column colouring of the
-sparsity pattern (25 JVPs + 2 VJPs for 281 states instead of 281 JVPs; :func:`jacobian_coloring`), which halves the
+sparsity pattern (23 JVPs + 2 VJPs for 431 states instead of 431 JVPs; :func:`jacobian_coloring`), which halves the
 cost per step; ``TransientSettings(jacobian="dense")`` uses diffrax' own ``VeryChord``.  The LU stays dense: the
 journal-acceleration rows couple every pressure, and a ~300 x 300 LU costs about as much as one Jacobian.
 
-Measured (``benchmarks/transient_speed.py``, default grid Nx=40, Nz=6: 281 states, Omega_bar = 0.5, 3 revolutions
-from the equilibrium, 2-core CPU, OMP_NUM_THREADS=1): Kvaerno5 with the coloured Jacobian at rtol 1e-5 / atol 1e-7
-takes ~110 steps per revolution, ~260 steps/s, ~2.4 revolutions per second with an end-state error ~1e-6 against a
-rtol-1e-9 reference; at rtol 1e-6: 1.3 rev/s (error 6e-7); diffrax' dense VeryChord Jacobian: 1.0 rev/s; scipy
-``solve_ivp`` Radau with the exact jitted Jacobian: 1.1 rev/s (error 1e-7), BDF: 3.2 rev/s (error 6e-6, it reuses
-Jacobians over many steps).  Set ``OMP_NUM_THREADS=1`` before numpy/jax load on a small shared machine: a
-multi-threaded 281 x 281 LU was 50-100x slower there under load.
+Measured (``benchmarks/transient_speed.py``, default grid Nx=48, Nz=8: 431 states, Omega_bar = 0.5, 3 revolutions
+from the equilibrium, 2-core CPU, one BLAS thread): Kvaerno5 with the coloured Jacobian gives 1.02 revolutions per
+second at rtol 1e-5 (end-state error 1.1e-6 against an rtol-1e-9 reference) and 0.64 rev/s at rtol 1e-6 (1.3e-7);
+diffrax' dense VeryChord Jacobian 0.33 rev/s; scipy ``solve_ivp`` Radau with the exact jitted Jacobian 0.64 rev/s
+(2.7e-7), BDF 2.28 rev/s (5.2e-6; it reuses Jacobians over many steps).  Multi-threaded BLAS on a small shared
+machine made these small LUs 50-100x slower, hence ``OPENBLAS_NUM_THREADS=1`` by default (``gfbjax/__init__``).
 
 Long runs are integrated in chunks of ``chunk_revs`` revolutions: one compiled ``diffeqsolve`` per
 (grid, settings), reused by every chunk, a progress bar advanced per chunk, and everything computed up to a

@@ -81,3 +81,17 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
     assert summary["range"]["reached_end"] == (code == 0)
     assert set(summary["timings_s"]) >= {"continuation", "total"}
     assert "special points" in stdout
+
+    # the branch file is what `gfbjax runup --cycles` overlays on the run-up (paper Fig. 7a/b)
+    from gfbjax.commands.runup import _cycle_overlay
+
+    ov = _cycle_overlay(str(out / "branch.npz"))
+    np.testing.assert_array_equal(ov["speed"], lam)
+    assert ov["y_max"].shape == ov["y_min"].shape == lam.shape
+    assert np.all(ov["y_max"] >= ov["y_min"]) and np.all(ov["x_max"] >= ov["x_min"])
+
+
+def test_runup_bad_cycles_file_exits_2_before_integrating(tmp_path, capsys):
+    code, _, err = _run(["runup", *TINY[:4], "--cycles", str(tmp_path / "missing.npz"), "--out", str(tmp_path)],
+                        capsys)
+    assert code == 2 and "--cycles" in err

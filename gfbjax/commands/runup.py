@@ -70,6 +70,9 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="a sub-synchronous peak counts above this fraction of the 1X amplitude (default 0.1)")
     o.add_argument("--floor", type=float, default=1e-3,
                    help="... and above this absolute amplitude over c (default 1e-3)")
+    o.add_argument("--cycles", default=None, metavar="BRANCH",
+                   help="overlay the max/min of the limit cycles of a branch file written by 'gfbjax cycles' "
+                        "(e.g. results/cycles/branch.npz) on the run-up figure, as in the paper's Fig. 7a/b")
     o.add_argument("--no-figures", action="store_true", help="no PNG figures")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -93,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     if args.revs is not None:
         check_option("--revs", args.revs, 0.0, 1e6, lo_open=True, what="revolutions")
     check_option("--settle-revs", args.settle_revs, 0.0, 1e5, what="revolutions")
+    overlay = _cycle_overlay(args.cycles)  # read before the long integration: a bad file fails fast
     settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
                                  samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
     out = output_dir(args)
@@ -152,8 +156,8 @@ def run(args: argparse.Namespace) -> int:
 
         from ..plot_transient import plot_runup, plot_spectrogram
 
-        fig = plot_runup(res, c_um=c_um, title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)",
-                         path=out / "runup_response.png")
+        fig = plot_runup(res, overlay, c_um=c_um,
+                         title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)", path=out / "runup_response.png")
         plt.close(fig)
         figures.append("runup_response.png")
         if "y_j" in spectros:
@@ -174,3 +178,20 @@ def run(args: argparse.Namespace) -> int:
     print(f"  wrote             {out}/: runup.npz, runup.json" + "".join(f", {f}" for f in figures)
           + f"  ({data['total_s']:.1f} s)", flush=True)
     return 0 if res.outcome == "completed" else 1
+
+
+def _cycle_overlay(path: str | None) -> dict | None:
+    """Max/min of the journal displacement of a saved cycle branch, in the form ``plot_runup`` takes."""
+    if path is None:
+        return None
+    from ..cont import Branch
+    from ..params import ParameterError
+
+    try:
+        b = Branch.load(path)
+    except (OSError, ValueError, KeyError) as e:
+        raise ParameterError(f"--cycles {path}: not a readable branch file ({e})") from e
+    if b.kind != "cycles":
+        raise ParameterError(f"--cycles {path}: branch kind is {b.kind!r}, expected 'cycles'")
+    return {"speed": b.lam, "stable": b.stable, "x_max": b.xmax[:, 0], "x_min": b.xmin[:, 0],
+            "y_max": b.xmax[:, 1], "y_min": b.xmin[:, 1]}

@@ -13,7 +13,10 @@ removed first, see ``floquet.nontrivial``):
   Detected by a change of the number of complex multipliers outside the unit
   circle, localised on :math:`\psi_{NS} = |\mu_c| - 1` for the complex
   multiplier closest to the circle; the angle :math:`\arg\mu_c \in (0,\pi)`
-  is reported.
+  is reported.  Pairs with :math:`|\arg\mu| <` ``NS_MIN_ANGLE`` count as real:
+  next to a Hopf point a cycle has a second multiplier near +1, and the nearly
+  defective pair it forms with the trivial one splits into a spurious complex
+  pair of tiny argument (a 1:1 resonance, not a torus).
 
 Localisation: the secant/regula-falsi (Illinois) iteration on the arclength
 ``s`` between two branch points, each evaluation being a full pseudo-arclength
@@ -30,10 +33,11 @@ from . import collocation as col
 from .floquet import nontrivial
 
 IMAG_TOL = 1e-7
+NS_MIN_ANGLE = 1e-2  # rad
 
 
 def _is_real(mu: np.ndarray) -> np.ndarray:
-    return np.abs(mu.imag) <= IMAG_TOL * np.maximum(1.0, np.abs(mu))
+    return (np.abs(mu.imag) <= IMAG_TOL * np.maximum(1.0, np.abs(mu))) | (np.abs(np.angle(mu)) < NS_MIN_ANGLE)
 
 
 def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> dict[str, float]:

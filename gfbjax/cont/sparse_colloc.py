@@ -29,6 +29,7 @@ The Newton semantics (convergence test, failure reasons, tangent) are those of :
 """
 from __future__ import annotations
 
+import hashlib
 from functools import partial
 from typing import Any
 
@@ -73,7 +74,7 @@ def _linear_data(f, args, orbit: col.Orbit, scheme: col.Scheme, coloring_key, Kp
     return Kdata, ALdata, Bp.reshape(Bp.shape[0], m * Fx.shape[-1], 2)
 
 
-_COLORINGS: dict[int, Coloring] = {}
+_COLORINGS: dict[tuple[int, str], Coloring] = {}
 _residual = jax.jit(col.residual, static_argnums=(0, 4))
 _coeffs = jax.jit(col._functional_coeffs, static_argnums=(2,))
 
@@ -177,9 +178,11 @@ class SparseCollocation:
         self.n_multipliers = int(min(n_multipliers, n - 2))
         self.gmres_rtol, self.gmres_restart, self.gmres_maxiter = gmres_rtol, gmres_restart, gmres_maxiter
         self.permc_spec = permc_spec
-        self.coloring = color_pattern(pattern)
-        self._key = id(self.coloring)
-        _COLORINGS[self._key] = self.coloring
+        # one colouring (and one compiled kernel) per pattern, shared by every instance
+        self._key = (n, hashlib.sha1(np.packbits(pattern).tobytes()).hexdigest())
+        if self._key not in _COLORINGS:
+            _COLORINGS[self._key] = color_pattern(pattern)
+        self.coloring = _COLORINGS[self._key]
         m, c = scheme.m, self.coloring
         R, C = c.rows, c.cols
         self._isdiag = jnp.asarray((R == C).astype(float))
@@ -265,9 +268,14 @@ class SparseCollocation:
         lin = self._cached(orbit)
         M = spla.LinearOperator((self.n, self.n), matvec=lin.monodromy_matvec, dtype=float)
         v0 = np.ones(self.n) / np.sqrt(self.n)
-        mu = spla.eigs(M, k=k, which="LM", v0=v0, tol=1e-11, ncv=min(self.n, max(2 * k + 1, 30)),
-                       return_eigenvectors=False)
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
+        for ncv in (max(2 * k + 1, 30), 4 * k + 20):  # a larger Krylov space if ARPACK does not converge
+            try:
+                mu = spla.eigs(M, k=k, which="LM", v0=v0, tol=1e-11, ncv=min(self.n, ncv),
+                               maxiter=50 * self.n, return_eigenvectors=False)
+                return mu[np.argsort(-np.abs(mu), kind="stable")]
+            except spla.ArpackNoConvergence as e:
+                err = e
+        raise SolveError(f"Arnoldi (ARPACK) did not converge for the {k} leading Floquet multipliers: {err}")
 
     def transfer_matrices(self, orbit: col.Orbit) -> np.ndarray:
         """Gamma_j (N, n, n) at ``orbit`` (n right-hand sides per interval: for branch switching, not per point)."""
