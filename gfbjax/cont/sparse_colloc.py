@@ -221,7 +221,6 @@ class SparseCollocation:
         factorisation per iteration and none extra per point."""
         steps: list[float] = []
         rn = dn = float("inf")
-        st = col
         for it in range(1, max_iter + 1):
             rc, rper, rs = (np.asarray(a) for a in _residual(self.f, self.args, orbit, con, self.scheme))
             rn = max(np.max(np.abs(rc)), np.max(np.abs(rper)), np.max(np.abs(rs)))
@@ -229,13 +228,13 @@ class SparseCollocation:
                 lin = self.linearise(orbit, con)
                 d = lin.solve(-rc, -rper, -rs, self.gmres_rtol)
             except SolveError as e:
-                return col.NewtonResult(orbit, st.STATUS_NONFINITE, f"linear solve failed: {e}", it, rn, dn)
+                return col.NewtonResult(orbit, col.STATUS_NONFINITE, f"linear solve failed: {e}", it, rn, dn)
             dn = float(np.max(np.abs(np.asarray(d.to_flat()))))
             if not (np.isfinite(rn) and np.isfinite(dn)):
-                return col.NewtonResult(orbit, st.STATUS_NONFINITE, st._REASONS[st.STATUS_NONFINITE], it, rn, dn)
+                return col.NewtonResult(orbit, col.STATUS_NONFINITE, col._REASONS[col.STATUS_NONFINITE], it, rn, dn)
             steps.append(dn)
             if len(steps) >= 3 and dn > divergence_factor * min(steps[:-1]):
-                return col.NewtonResult(orbit, st.STATUS_DIVERGED, st._REASONS[st.STATUS_DIVERGED], it, rn, dn)
+                return col.NewtonResult(orbit, col.STATUS_DIVERGED, col._REASONS[col.STATUS_DIVERGED], it, rn, dn)
             orbit = orbit + d
             if dn <= rtol_step * (1.0 + float(jnp.max(jnp.abs(orbit.xm)))):
                 rc, rper, rs = (np.asarray(a) for a in _residual(self.f, self.args, orbit, con, self.scheme))
@@ -244,13 +243,13 @@ class SparseCollocation:
                     try:
                         tan = self._tangent_from(lin, orbit, con)
                     except SolveError as e:
-                        return col.NewtonResult(orbit, st.STATUS_NONFINITE, f"tangent solve failed: {e}", it,
+                        return col.NewtonResult(orbit, col.STATUS_NONFINITE, f"tangent solve failed: {e}", it,
                                                 rfin, dn)
                     lin.orbit = orbit  # the multipliers of ``orbit`` use this linearisation (see above)
-                    return col.NewtonResult(orbit, st.STATUS_CONVERGED, st._REASONS[st.STATUS_CONVERGED], it,
+                    return col.NewtonResult(orbit, col.STATUS_CONVERGED, col._REASONS[col.STATUS_CONVERGED], it,
                                             rfin, dn, tan)
                 rn = rfin
-        return col.NewtonResult(orbit, st.STATUS_MAXITER, st._REASONS[st.STATUS_MAXITER], max_iter, rn, dn)
+        return col.NewtonResult(orbit, col.STATUS_MAXITER, col._REASONS[col.STATUS_MAXITER], max_iter, rn, dn)
 
     def _tangent_from(self, lin: _Linearisation, orbit: col.Orbit, con: col.Constraint) -> col.Orbit:
         N, m, n = orbit.N, self.scheme.m, self.n
