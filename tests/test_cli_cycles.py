@@ -95,3 +95,23 @@ def test_runup_bad_cycles_file_exits_2_before_integrating(tmp_path, capsys):
     code, _, err = _run(["runup", *TINY[:4], "--cycles", str(tmp_path / "missing.npz"), "--out", str(tmp_path)],
                         capsys)
     assert code == 2 and "--cycles" in err
+
+
+def test_equilibria_hopf_cycles_tiny_run(tmp_path, capsys):
+    """Table 1 from the command line: equilibria, their Hopf point and the cycles born there (tiny grid)."""
+    out = tmp_path / "eq"
+    code, stdout, _ = _run(["equilibria", "--system", "validation10N", "--nx", "16", "--nz", "2", "--start", "0.4",
+                            "--end", "0.9", "--hopf-cycles", "4", "--quiet", "--out", str(out)], capsys)
+    assert code in (0, 1)
+    summary = json.loads((out / "equilibria.json").read_text())
+    assert any(d["type"] == "HOPF" for d in summary["special"])
+    hc = summary["hopf_cycles"]
+    assert hc["points"] >= 2 and hc["criticality"] in ("subcritical", "supercritical", "undetermined")
+    for name in ["hopf_cycles.npz", "hopf_cycles.json", "hopf_cycles.png"]:
+        assert (out / name).is_file(), name
+    assert "Hopf cycles" in stdout
+
+
+def test_equilibria_bad_hopf_cycles_exits_2(tmp_path, capsys):
+    code, _, err = _run(["equilibria", *TINY[:4], "--hopf-cycles", "-3", "--out", str(tmp_path)], capsys)
+    assert code == 2 and "--hopf-cycles" in err

@@ -52,6 +52,9 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     n.add_argument("--ds-max", type=float, default=0.5, help="largest arclength step (default 0.5)")
     n.add_argument("--max-points", type=int, default=200, metavar="P", help="most points (default 200)")
     n.add_argument("--no-locate", action="store_true", help="do not locate the Hopf/fold points")
+    n.add_argument("--hopf-cycles", type=int, default=0, metavar="P",
+                   help="also continue the self-excited cycles born at the first Hopf point, P points (default 0: "
+                        "off); tells super- from subcritical and gives the whirl amplitude (paper Table 1)")
     o = p.add_argument_group("output")
     o.add_argument("--no-figures", action="store_true", help="no PNG figure")
     o.add_argument("--quiet", action="store_true", help="no progress output")
@@ -71,6 +74,7 @@ def _settings(args: argparse.Namespace):
     if args.ds_max < args.ds:
         raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
     check_option("--max-points", args.max_points, 2, 10**6, what="points")
+    check_option("--hopf-cycles", args.hopf_cycles, 0, 10**5, what="points")
     try:
         return EquilibriumSettings(ds=args.ds, ds_max=args.ds_max, max_points=args.max_points,
                                    locate=not args.no_locate)
@@ -153,7 +157,11 @@ def run(args: argparse.Namespace) -> int:
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}")
     print("\n".join(lines), flush=True)
 
+    hopf = _hopf_cycles(args, params, spec, branch, out) if args.hopf_cycles and branch.special_of("HOPF") else None
+
     figures: list[str] = []
+    if hopf is not None and not args.no_figures:
+        figures.append("hopf_cycles.png")
     if not args.no_figures and len(branch):
         import matplotlib
 
@@ -175,10 +183,61 @@ def run(args: argparse.Namespace) -> int:
         "counts": {"points": len(branch), "stable": n_stable, "HOPF": sum(d["type"] == "HOPF" for d in rows),
                    "FOLD": sum(d["type"] == "FOLD" for d in rows)},
         "special": rows,
-        "files": ["branch.npz", "branch.json", "equilibria.json"] + figures,
+        "hopf_cycles": hopf,
+        "files": ["branch.npz", "branch.json", "equilibria.json"] + (["hopf_cycles.npz", "hopf_cycles.json"]
+                                                                     if hopf else []) + figures,
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "total": time.perf_counter() - t0},
     }
     write_json(out / "equilibria.json", data)
     print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
           flush=True)
     return 0 if ok else 1
+
+
+def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, out: Any) -> dict:
+    """Self-excited cycles from the first Hopf point: branch file, figure and a summary (criticality, amplitude)."""
+    import numpy as np
+
+    from ..cycles import continue_gfb_hopf_cycles, default_cycle_settings
+
+    lo, hi = sorted((args.start, args.end))
+    s = default_cycle_settings(ds=0.02, ds_max=2.0, dlam_max=0.005, max_points=args.hopf_cycles, lam_min=lo,
+                               lam_max=hi)
+    t0 = time.perf_counter()
+    cyc = continue_gfb_hopf_cycles(params, branch, 0, s, progress=not args.quiet)
+    cyc.save(out / "hopf_cycles")
+    lam_h = float(branch.special_of("HOPF")[0]["lam"])
+    amp = (cyc.xmax - cyc.xmin)[:, :2] / 2 if len(cyc) else np.zeros((0, 2))
+    crit = "undetermined"
+    if len(cyc):
+        if cyc.lam[0] < lam_h and not cyc.stable[0]:
+            crit = "subcritical"
+        elif cyc.lam[0] > lam_h and cyc.stable[0]:
+            crit = "supercritical"
+    past = [i for i in range(len(cyc)) if cyc.stable[i] and cyc.lam[i] > lam_h]
+    first_past = None
+    if past:
+        i = past[0]
+        first_past = {"Omega_bar": float(cyc.lam[i]), "rpm": spec.rpm(float(cyc.lam[i])),
+                      "amplitude_xj_c": float(amp[i, 0]), "amplitude_yj_c": float(amp[i, 1])}
+    summary = {"criticality": crit, "points": len(cyc), "reason": cyc.reason,
+               "special": [{"type": sp["type"], "Omega_bar": float(sp["lam"]), "rpm": spec.rpm(float(sp["lam"]))}
+                           for sp in cyc.special],
+               "first_stable_cycle_past_hopf": first_past, "seconds": time.perf_counter() - t0}
+    line = f"  Hopf cycles       {crit}, {len(cyc)} points ({cyc.reason})"
+    if first_past:
+        line += (f"; first stable cycle past the Hopf speed at {first_past['rpm']:.0f} rpm: amplitude "
+                 f"x {first_past['amplitude_xj_c']:.3f} c, y {first_past['amplitude_yj_c']:.3f} c")
+    print(line, flush=True)
+    if not args.no_figures and len(cyc):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from ..plot_branch import plot_bifurcation
+
+        fig = plot_bifurcation(cyc, title=f"Self-excited cycles from the Hopf point, system '{args.system}'",
+                               path=out / "hopf_cycles.png")
+        plt.close(fig)
+    return summary
