@@ -269,6 +269,7 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
     special: list[dict[str, Any]] = []
     special_states: list[dict[str, np.ndarray]] = []
     reason = "unknown"
+    backend = make_backend(problem, scheme, settings)  # a bad choice raises here, before any work
     bar = None
     if progress:
         try:
@@ -278,7 +279,6 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
             bar = None
     shared = {"mesh": np.asarray(start.orbit.mesh)} if settings.save_states else None
     try:
-        backend = make_backend(problem, scheme, settings)
         reason = _loop(problem, settings, scheme, backend, start, points, special, special_states, callback, bar)
     except KeyboardInterrupt:
         reason = "interrupted"

@@ -141,3 +141,10 @@ def test_sparse_requires_pattern(setup):
         make_backend(bare, sch, cont.CycleSettings(linear_solver="sparse"))
     with pytest.raises(ValueError, match="linear_solver"):
         cont.CycleSettings(linear_solver="banded")
+
+
+def test_sparse_without_pattern_raises_before_continuing(setup):
+    _, sch, guess = setup
+    bare = cont.CycleProblem(f=ring, n=2 * K, args=jnp.array([W, D]))
+    with pytest.raises(ValueError, match="jac_sparsity"):
+        cont.continue_cycles(bare, cont.CycleSettings(linear_solver="sparse", max_points=2), cont.CycleStart(guess))
