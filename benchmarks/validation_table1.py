@@ -19,7 +19,8 @@ import gfbjax
 import numpy as np
 
 from gfbjax import cont
-from gfbjax.cycles import continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings
+from gfbjax.cycles import (continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings,
+                           hopf_criticality)
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -45,8 +46,7 @@ def run(load: float, points: int) -> dict:
     lam_h = float(hopf[0]["lam"])
     rec["cycles"] = {
         "seconds": round(time.perf_counter() - t0, 1), "reason": b.reason,
-        "criticality": ("subcritical" if b.lam[0] < lam_h and not b.stable[0] else
-                        "supercritical" if b.lam[0] > lam_h and b.stable[0] else "undetermined"),
+        "criticality": hopf_criticality(b, lam_h),
         "Omega_bar": b.lam.tolist(), "rpm": [spec.rpm(float(v)) for v in b.lam],
         "amplitude_xj_c": amp[:, 0].tolist(), "amplitude_yj_c": amp[:, 1].tolist(),
         "stable": b.stable.tolist(), "period": b.period.tolist(),

@@ -27,9 +27,10 @@ RESULTS = Path(__file__).resolve().parent / "results"
 DESIGNS = ["reference", "ks0.3", "ks3", "af0.01", "af1", "eta0.005", "eta0.5", "G1", "G2.5"]
 
 
-def _branch(name: str, src: Path | None, kind: str) -> tuple[cont.Branch, float | None]:
-    if src is not None and (src / name / "branch.json").exists():
-        return cont.Branch.load(src / name / "branch"), None
+def _branch(name: str, src: Path | None, kind: str, folder: str | None = None) -> tuple[cont.Branch, float | None]:
+    """Load ``src/<folder or name>/branch`` when present, else compute the branch (and time it)."""
+    if src is not None and (src / (folder or name) / "branch.json").exists():
+        return cont.Branch.load(src / (folder or name) / "branch"), None
     params = gfbjax.variation(name).nondim()
     t0 = time.perf_counter()
     b = (continue_gfb_cycles(params, 0.05, 1.0) if kind == "cycles"
@@ -59,8 +60,7 @@ def main() -> None:
         b, sec = _branch(name, src, "cycles")
         branches[name] = b
         rows.append(summary(name, b, sec))
-    g0, sec = _branch("G0", src, "equilibria") if not (src and (src / "G0eq").exists()) else \
-        (cont.Branch.load(src / "G0eq" / "branch"), None)
+    g0, sec = _branch("G0", src, "equilibria", folder="G0eq")
     g0row = summary("G0", g0, sec)
     for s, raw in zip(g0row["special"], g0.special):
         if s["type"] == "HOPF" and raw.get("angle") is not None:

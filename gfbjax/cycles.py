@@ -31,7 +31,7 @@ from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
            "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "rotor_components",
-           "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles"]
+           "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles", "hopf_criticality"]
 
 JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
 
@@ -162,6 +162,18 @@ def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int
     start = cont.start_from_hopf(hp, settings)
     return cont.continue_cycles(gfb_self_excited_problem(params), settings, start, progress=progress,
                                 callback=callback)
+
+
+def hopf_criticality(cycles: cont.Branch, lam_hopf: float) -> str:
+    """"subcritical" when the first cycles from a Hopf point lie below its speed and are unstable, "supercritical"
+    when they lie above it and are stable, else "undetermined"."""
+    if len(cycles) == 0:
+        return "undetermined"
+    if cycles.lam[0] < lam_hopf and not cycles.stable[0]:
+        return "subcritical"
+    if cycles.lam[0] > lam_hopf and cycles.stable[0]:
+        return "supercritical"
+    return "undetermined"
 
 
 def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float,

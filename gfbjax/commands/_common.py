@@ -234,3 +234,16 @@ def to_jsonable(obj: Any) -> Any:
 def write_json(path: Path, data: Any) -> Path:
     path.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
     return path
+
+
+def check_continuation_options(args: argparse.Namespace) -> None:
+    """Checks shared by the continuation commands: speed range --start/--end, steps --ds/--ds-max, --max-points."""
+    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    if args.start == args.end:
+        raise ParameterError("--end must differ from --start")
+    check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
+    check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
+    if args.ds_max < args.ds:
+        raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
+    check_option("--max-points", args.max_points, 2, 10**6, what="points")

@@ -10,7 +10,8 @@ import time
 from typing import Any
 
 from ..params import ParameterError
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json
+from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
+                      traced_params, write_json)
 
 NAME = "cycles"
 
@@ -75,18 +76,10 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 def _settings(args: argparse.Namespace):
     from ..cycles import default_cycle_settings
 
-    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    if args.start == args.end:
-        raise ParameterError("--end must differ from --start")
+    check_continuation_options(args)
     check_option("--m", args.m, 2, 7, what="collocation points per interval")
     check_option("--N", args.N, 2, 10**5, what="mesh intervals")
-    check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
-    check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
-    if args.ds_max < args.ds:
-        raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
     check_option("--dlam-max", args.dlam_max, 0.0, None, lo_open=True, what="speed change per step")
-    check_option("--max-points", args.max_points, 2, 10**6, what="points")
     try:
         return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
                                       ds_max=args.ds_max, dlam_max=args.dlam_max, max_points=args.max_points,

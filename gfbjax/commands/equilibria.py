@@ -9,7 +9,8 @@ import time
 from typing import Any
 
 from ..params import ParameterError
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json
+from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
+                      traced_params, write_json)
 
 NAME = "equilibria"
 
@@ -65,15 +66,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 def _settings(args: argparse.Namespace):
     from ..cont import EquilibriumSettings
 
-    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    if args.start == args.end:
-        raise ParameterError("--end must differ from --start")
-    check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
-    check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
-    if args.ds_max < args.ds:
-        raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
-    check_option("--max-points", args.max_points, 2, 10**6, what="points")
+    check_continuation_options(args)
     check_option("--hopf-cycles", args.hopf_cycles, 0, 10**5, what="points")
     try:
         return EquilibriumSettings(ds=args.ds, ds_max=args.ds_max, max_points=args.max_points,
@@ -198,7 +191,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     """Self-excited cycles from the first Hopf point: branch file, figure and a summary (criticality, amplitude)."""
     import numpy as np
 
-    from ..cycles import continue_gfb_hopf_cycles, default_cycle_settings
+    from ..cycles import continue_gfb_hopf_cycles, default_cycle_settings, hopf_criticality
 
     lo, hi = sorted((args.start, args.end))
     s = default_cycle_settings(ds=0.02, ds_max=2.0, dlam_max=0.005, max_points=args.hopf_cycles, lam_min=lo,
@@ -208,12 +201,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     cyc.save(out / "hopf_cycles")
     lam_h = float(branch.special_of("HOPF")[0]["lam"])
     amp = (cyc.xmax - cyc.xmin)[:, :2] / 2 if len(cyc) else np.zeros((0, 2))
-    crit = "undetermined"
-    if len(cyc):
-        if cyc.lam[0] < lam_h and not cyc.stable[0]:
-            crit = "subcritical"
-        elif cyc.lam[0] > lam_h and cyc.stable[0]:
-            crit = "supercritical"
+    crit = hopf_criticality(cyc, lam_h)
     past = [i for i in range(len(cyc)) if cyc.stable[i] and cyc.lam[i] > lam_h]
     first_past = None
     if past:
