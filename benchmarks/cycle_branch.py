@@ -37,16 +37,18 @@ def main() -> None:
     ap.add_argument("--start", type=float, default=0.05)
     ap.add_argument("--end", type=float, default=1.0)
     ap.add_argument("--dlam-max", type=float, default=0.02)
+    ap.add_argument("--m", type=int, default=4, help="collocation points per interval")
+    ap.add_argument("--N", type=int, default=16, help="mesh intervals")
     ap.add_argument("--no-dense", action="store_true", help="skip the dense-condensation reference iteration")
     ap.add_argument("--out", default=str(RESULTS / "cycle_branch.json"))
     a = ap.parse_args()
 
     params = gfbjax.reference_system(Nx=a.nx, Nz=a.nz).nondim()
     prob = gfb_cycle_problem(params)
-    settings = default_cycle_settings(dlam_max=a.dlam_max)
+    settings = default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N)
 
     t0 = time.perf_counter()
-    warm = continue_gfb_cycles(params, a.start, a.end, default_cycle_settings(dlam_max=a.dlam_max, max_points=3))
+    warm = continue_gfb_cycles(params, a.start, a.end, default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N, max_points=3))
     t_compile = time.perf_counter() - t0
     assert len(warm) == 3, warm.reason
 

@@ -10,7 +10,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "SPECIAL_STYLE"]
+__all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_energy", "SPECIAL_STYLE"]
 
 # marker, colour of each special-point type
 SPECIAL_STYLE = {"NS": ("D", "tab:purple"), "PD": ("s", "tab:orange"), "LPC": ("^", "tab:green"),
@@ -188,5 +188,48 @@ def plot_equilibria(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), colum
         ax.grid(alpha=0.3)
         ax.legend(loc="best", fontsize=7)
     fig.suptitle(title or "Equilibria of the balanced rotor")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None = None,
+                path: str | Path | None = None):
+    """Energy flow along cycle branches (paper Fig. 12): W_fu, W_cf and W_cb [p0 R L c] against Omega_bar, one
+    panel per design; stable solid, unstable dashed; NS points and the sign changes of W_cb marked.
+
+    ``branches``: (label, branch, :class:`gfbjax.energy.CycleEnergy` of its points) per design."""
+    import matplotlib.pyplot as plt
+
+    from .energy import sign_changes
+
+    k = len(branches)
+    ncol = 2 if k > 1 else 1
+    nrow = (k + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
+    for ax, (label, b, E) in zip(axes.ravel(), branches):
+        lam = np.asarray(b.lam, float)
+        stable = np.asarray(b.stable, bool)
+        for W, name, colour in ((E.W_fu, "$W_{fu}$", "k"), (E.W_cf, "$W_{cf}$", "tab:green"),
+                                (E.W_cb, "$W_{cb}$", "tab:red")):
+            W = np.asarray(W, float)
+            for i, (xs, ys) in enumerate(_segments(lam, W, stable)):
+                ax.plot(xs, ys, "-", color=colour, lw=1.6, label=name if i == 0 else None)
+            for xs, ys in _segments(lam, W, ~stable):
+                ax.plot(xs, ys, "--", color=colour, lw=1.1)
+        for s in b.special_of("NS"):
+            ax.axvline(float(s["lam"]), color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
+            ax.annotate(f"NS {float(s['lam']):.4f}", (float(s["lam"]), 0.0), textcoords="offset points",
+                        xytext=(4, 10), fontsize=8, color=SPECIAL_STYLE["NS"][1])
+        for c in sign_changes(lam, E.W_cb):
+            ax.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec="tab:red", ms=8)
+        ax.axhline(0.0, color="0.5", lw=0.6)
+        ax.set_title(label, fontsize=10)
+        ax.set_xlabel(r"speed $\bar\Omega$")
+        ax.set_ylabel(r"work per cycle [$p_0 R L c$]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    for ax in axes.ravel()[k:]:
+        ax.set_visible(False)
+    fig.suptitle(title or "Energy flow of the limit cycles (solid stable, dashed unstable; o: W_cb = 0)")
     fig.tight_layout()
     return _save(fig, path)

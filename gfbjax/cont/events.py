@@ -6,9 +6,12 @@ removed first, see ``floquet.nontrivial``):
 * **LPC** (fold of cycles): the lam-component of the normalised tangent
   :math:`\dot\lambda` changes sign.
 * **PD** (flip): a real multiplier crosses -1.  Detected by a change of the
-  number of real multipliers below -1; localised on the continuous function
-  :math:`\psi_{PD} = \mu_* + 1`, :math:`\mu_*` the real negative multiplier
-  closest to -1.
+  number of real multipliers below -1; localised on
+  :math:`\psi_{PD} = \prod_{\mu\ real} (\mu + 1) \prod_{\mu\ complex} |\mu + 1|`,
+  i.e. :math:`\det(M + I)` over the non-trivial multipliers: continuous, and of
+  changing sign both in the generic flip and where a complex pair meets at -1
+  and splits into -r, -1/r (Hamiltonian or parametric resonance, e.g. the
+  Mathieu tongues), where the multiplier closest to -1 never crosses it.
 * **NS** (Neimark-Sacker / torus): a complex pair crosses :math:`|\mu| = 1`.
   Detected by a change of the number of complex multipliers outside the unit
   circle, localised on :math:`\psi_{NS} = |\mu_c| - 1` for the complex
@@ -46,7 +49,7 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
     real = _is_real(nt)
     neg = nt[real & (nt.real < 0)].real
     cplx = nt[~real]
-    psi_pd = float(neg[np.argmin(np.abs(neg + 1))] + 1.0) if len(neg) else 1.0
+    psi_pd = float(np.prod(nt[real].real + 1.0) * np.prod(np.abs(cplx + 1.0)))
     psi_ns = float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]) - 1.0) if len(cplx) else -1.0
     return {"LPC": float(tangent_lam), "PD": psi_pd, "NS": psi_ns,
             "n_pd": int(np.sum(neg < -1.0)), "n_ns": int(np.sum(np.abs(cplx) > 1.0))}
@@ -79,9 +82,12 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
     """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
 
     ``g(s)`` returns (value, payload) and may return (nan, None) on failure.
-    Returns (s, payload, value, converged).
+    Returns (s, payload, value, converged); not converged (and no evaluation) when
+    g_lo and g_hi do not bracket a zero.
     """
     a, b, ga, gb = 0.0, float(s_hi), float(g_lo), float(g_hi)
+    if not (np.sign(ga) * np.sign(gb) <= 0):
+        return b, None, gb, False
     side = 0
     best = (b, None, gb)
     for _ in range(max_iter):

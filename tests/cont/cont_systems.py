@@ -49,3 +49,14 @@ def torus_field(x, lam, p):
     a = lam - 0.5
     return jnp.array([lam * x[0] - w * x[1] - x[0] * r2, w * x[0] + lam * x[1] - x[1] * r2,
                       a * x[2] - nu * x[3], nu * x[2] + a * x[3]])
+
+
+def mathieu_duffing(z, a, p):
+    """Mathieu-Duffing x'' + (a - 2 q cos 2t) x + beta x^3 = 0, written autonomously with the oscillator
+    u' = u + 2 s - u(u^2+s^2), s' = -2 u + s - s(u^2+s^2), attracting cycle (cos 2t, -sin 2t) of period pi.
+    x = 0 is a cycle for every a; its stability is Mathieu's: multipliers -1 on the characteristic curves
+    a = a_1(q), b_1(q) (period-2 pi Mathieu functions ce_1, se_1)."""
+    q, beta = p[0], p[1]
+    x, v, u, s = z[0], z[1], z[2], z[3]
+    r2 = u * u + s * s
+    return jnp.array([v, -(a - 2.0 * q * u) * x - beta * x ** 3, u + 2.0 * s - u * r2, -2.0 * u + s - s * r2])
