@@ -30,6 +30,17 @@ LABELS = {"ks3": "a) $k_s$ = 3, G6.3", "af0.01": r"b) $\alpha_f$ = 0.01, G6.3", 
           "G2.5": "d) reference foil, G2.5", "reference": "reference, G6.3"}
 
 
+def first_local_max(lam: np.ndarray, W: np.ndarray) -> float | None:
+    """Speed of the first interior local maximum of W along the branch (vertex of the parabola through the
+    maximal point and its neighbours)."""
+    for i in range(1, len(W) - 1):
+        if W[i] >= W[i - 1] and W[i] > W[i + 1]:
+            x, y = lam[i - 1:i + 2], W[i - 1:i + 2]
+            c = np.polyfit(x, y, 2)
+            return float(-c[1] / (2 * c[0])) if c[0] < 0 else float(lam[i])
+    return None
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--nx", type=int, default=48)
@@ -48,11 +59,13 @@ def main() -> None:
         ns = [float(s["lam"]) for s in b.special_of("NS")]
         zc = sign_changes(b.lam, E.W_cb)
         first_down = next((c["Omega_bar"] for c in zc if c["from"] == "+"), None)
+        wmax = first_local_max(np.asarray(b.lam), np.asarray(E.W_cb))
         ident = float(np.max(np.abs(E.W_fu - E.W_B) / np.maximum(np.abs(E.W_fu), 1e-300)))
         rows.append({"design": name, "points": len(b), "reached": float(b.lam[-1]), "reason": b.reason,
                      "NS_Omega_bar": ns, "W_cb_sign_changes": zc,
                      "first_NS": ns[0] if ns else None, "first_W_cb_drop_below_0": first_down,
                      "difference": (first_down - ns[0]) if (ns and first_down is not None) else None,
+                     "first_W_cb_maximum": wmax,
                      "min_W_cf": float(np.min(E.W_cf)), "max_rel_identity_error": ident, "seconds": round(sec, 1),
                      "Omega_bar": b.lam.tolist(), "stable": np.asarray(b.stable).tolist(),
                      "W_fu": E.W_fu.tolist(), "W_cf": E.W_cf.tolist(), "W_cb": E.W_cb.tolist()})
@@ -65,10 +78,11 @@ def main() -> None:
     FIGURES.mkdir(parents=True, exist_ok=True)
     shutil.copy(out.with_suffix(".png"), FIGURES / "energy_flow.png")
     out.with_suffix(".json").write_text(json.dumps({"grid": [a.nx, a.nz], "designs": rows}, indent=1))
-    print(f"\n{'design':<10} {'first NS':>10} {'W_cb + -> -':>12} {'difference':>11}")
+    print(f"\n{'design':<10} {'first NS':>10} {'W_cb + -> -':>12} {'difference':>11} {'W_cb max at':>12}")
     for r in rows:
         f = lambda v: "-" if v is None else f"{v:.4f}"
-        print(f"{r['design']:<10} {f(r['first_NS']):>10} {f(r['first_W_cb_drop_below_0']):>12} {f(r['difference']):>11}")
+        print(f"{r['design']:<10} {f(r['first_NS']):>10} {f(r['first_W_cb_drop_below_0']):>12} {f(r['difference']):>11}"
+              f" {f(r['first_W_cb_maximum']):>12}")
     print(f"wrote {out.with_suffix('.json')}")
 
 

@@ -1,7 +1,8 @@
 """Figures of continuation branches (:class:`gfbjax.cont.Branch`): the bifurcation diagram of limit cycles (max and
 min of the journal displacements against speed, stable solid / unstable dashed, special points marked), the
 Floquet multipliers in the complex plane with the unit circle, and the equilibrium branch of the balanced rotor
-(journal position and critical eigenvalue real part against speed)."""
+(journal position and critical eigenvalue real part against speed), the energy flow of cycle branches and the
+optimised foil schedules of :func:`gfbjax.foil_opt.optimized_continuation`."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_energy", "SPECIAL_STYLE"]
+__all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_energy", "plot_schedule",
+           "SPECIAL_STYLE"]
 
 # marker, colour of each special-point type
 SPECIAL_STYLE = {"NS": ("D", "tab:purple"), "PD": ("s", "tab:orange"), "LPC": ("^", "tab:green"),
@@ -231,5 +233,87 @@ def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None =
     for ax in axes.ravel()[k:]:
         ax.set_visible(False)
     fig.suptitle(title or "Energy flow of the limit cycles (solid stable, dashed unstable; o: W_cb = 0)")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 8, title: str | None = None,
+                  path: str | Path | None = None):
+    """Optimised foil schedules along the speed (paper Figs. 16-19), one line (colour) per schedule:
+
+    a) journal orbit extent, the max and min over the cycle of y_j (solid) and x_j (dotted) [c];
+    b) the optimum alpha_f and c) eta (log scale, the bounds of :data:`gfbjax.design.FOIL_BOUNDS` dotted);
+    d) the largest non-trivial Floquet multiplier modulus with the stability limit |mu| = 1;
+    e) W_cb [p0 R L c], the net gas-film dissipation per cycle;
+    f) the ``n_show`` largest multipliers of every speed in the complex plane with the unit circle.
+
+    Unstable optimised cycles (where a march ends) are marked with a cross.  ``schedules``: (label,
+    :class:`gfbjax.foil_opt.Schedule`) pairs."""
+    import matplotlib.pyplot as plt
+
+    from .design import FOIL_BOUNDS
+
+    fig, axes = plt.subplots(3, 2, figsize=(12, 11.5))
+    ax_j, ax_a, ax_e, ax_mu, ax_w, ax_c = axes.ravel()
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    th = np.linspace(0, 2 * np.pi, 400)
+    ax_c.plot(np.cos(th), np.sin(th), "k-", lw=0.8, label="unit circle")
+    ax_mu.axhline(1.0, color="k", ls="--", lw=0.9, label=r"$|\mu| = 1$")
+    ax_w.axhline(0.0, color="0.5", lw=0.6)
+    for ax, name in ((ax_a, "alpha_f"), (ax_e, "eta")):
+        for v in FOIL_BOUNDS[name]:
+            ax.axhline(v, color="0.5", ls=":", lw=0.9)
+    any_unstable = False
+    for i, (label, s) in enumerate(schedules):
+        colour = colours[i % len(colours)]
+        w = np.asarray(s.omega, float)
+        if w.size == 0:
+            continue
+        bad = ~np.asarray(s.stable, bool)
+        any_unstable |= bool(bad.any())
+
+        def line(ax, y, ls="-", lab=label, mark=True):
+            y = np.asarray(y, float)
+            ax.plot(w, y, ls, color=colour, marker="o", ms=3, lw=1.5, label=lab)
+            if mark and bad.any():
+                ax.plot(w[bad], y[bad], "x", color=colour, ms=10, mew=2)
+
+        jmax = np.asarray(s.journal_max, float).reshape(len(w), -1)
+        jmin = np.asarray(s.journal_min, float).reshape(len(w), -1)
+        for k, (name, ls) in ((1, ("y", "-")), (0, ("x", ":"))):
+            line(ax_j, jmax[:, k], ls, f"{label}: ${name}_j$")
+            line(ax_j, jmin[:, k], ls, None)
+        line(ax_a, s.alpha_f)
+        line(ax_e, s.eta)
+        line(ax_mu, s.max_mu)
+        line(ax_w, s.W_cb)
+        for j, mu in enumerate(s.multipliers):
+            mu = np.asarray(mu, complex)[:n_show] if n_show is not None else np.asarray(mu, complex)
+            ax_c.scatter(mu.real, mu.imag, s=40 if bad[j] else 10, marker="x" if bad[j] else "o", color=colour,
+                         label=label if j == 0 else None)
+    panels = ((ax_j, "a) journal orbit: max / min over the cycle", r"$x_j/c$, $y_j/c$"),
+              (ax_a, r"b) foil compliance $\alpha_f$", r"$\alpha_f$"),
+              (ax_e, r"c) foil loss factor $\eta$", r"$\eta$"),
+              (ax_mu, r"d) largest non-trivial Floquet multiplier", r"max $|\mu|$"),
+              (ax_w, r"e) gas-film dissipation per cycle $W_{cb}$", r"$W_{cb}$ [$p_0 R L c$]"))
+    for ax, head, ylabel in panels:
+        ax.set_title(head, fontsize=10)
+        ax.set_xlabel(r"speed $\bar\Omega$")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+    ax_a.set_yscale("log")
+    ax_e.set_yscale("log")
+    if any_unstable:
+        ax_mu.plot([], [], "x", color="k", ms=10, mew=2, label="unstable")
+    ax_c.set_aspect("equal", adjustable="datalim")
+    ax_c.set_title("f) Floquet multipliers" + (f" ({n_show} largest per speed)" if n_show is not None else ""),
+                   fontsize=10)
+    ax_c.set_xlabel(r"Re $\mu$")
+    ax_c.set_ylabel(r"Im $\mu$")
+    ax_c.grid(alpha=0.3)
+    for ax in axes.ravel():
+        if ax.get_legend_handles_labels()[1]:
+            ax.legend(fontsize=7, loc="best")
+    fig.suptitle(title or "Optimised foil along the speed (x: unstable optimised cycle)")
     fig.tight_layout()
     return _save(fig, path)

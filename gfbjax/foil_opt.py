@@ -1,0 +1,235 @@
+r"""Foil optimisation at one speed and the optimised continuation in speed (paper Sect. 3.3 steps a-f, App. A2).
+
+Objectives (:mod:`gfbjax.design`): ``"W_cb"`` (OBJ1, maximise the gas-film dissipation per cycle; the paper's
+pattern search minimises ``1/W_cb``) and ``"max_mu"`` (OBJ2, minimise the largest non-trivial Floquet multiplier
+modulus).  Methods:
+
+* ``"pattern"`` — the paper's generalized pattern search (:func:`gfbjax.optim.pattern_search`, Appendix A2: mesh
+  1, x2 after a successful poll, x0.5 after a failed one, bounds of :data:`FOIL_BOUNDS`, mesh tolerance 1e-6, at
+  most 300 iterations) on the raw variables (alpha_f, eta);
+* ``"gradient"`` — projected quasi-Newton in log-variables with optax's L-BFGS direction
+  (:func:`gfbjax.optim.minimize_log_box`) and the implicit gradients of :class:`~gfbjax.design.FoilDesign`;
+* ``"adam"`` — optax Adam on sigmoid-bounded log-variables (:func:`gfbjax.optim.minimize_bounded`): slower to
+  converge, above all when the optimum is on a bound (kept for comparison).
+
+Every cycle is warm-started from the previous one (step c).  Both methods count limit-cycle solves.
+:func:`optimized_continuation` marches in speed (steps e-f): optimise at each speed from the previous optimum and
+cycle, step the speed, and stop where the optimised cycle is unstable (no admissible foil keeps it stable) or no
+cycle converges.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from .design import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
+from .optim import minimize_bounded, minimize_log_box, pattern_search
+from .params import ParameterError, Params
+
+__all__ = ["OBJECTIVES", "METHODS", "SpeedOptimum", "Schedule", "optimize_at_speed", "optimized_continuation"]
+
+OBJECTIVES = ("W_cb", "max_mu")
+METHODS = ("gradient", "adam", "pattern")
+LO = np.array([FOIL_BOUNDS["alpha_f"][0], FOIL_BOUNDS["eta"][0]])
+HI = np.array([FOIL_BOUNDS["alpha_f"][1], FOIL_BOUNDS["eta"][1]])
+
+
+def _check(objective: str, method: str) -> None:
+    if objective not in OBJECTIVES:
+        raise ParameterError(f"objective = {objective!r} is not one of {OBJECTIVES}")
+    if method not in METHODS:
+        raise ParameterError(f"method = {method!r} is not one of {METHODS}")
+
+
+def objective_value(ev: CycleEvaluation, objective: str) -> float:
+    """The objective in its physical form: W_cb [p0 R L c] (to maximise) or max|mu| (to minimise)."""
+    return ev.W_cb if objective == "W_cb" else ev.max_mu
+
+
+@dataclass
+class SpeedOptimum:
+    """Result of one optimisation at speed ``omega``: the best foil, its cycle, the counts and the history
+    (one row per evaluation: alpha_f, eta, objective value in physical form)."""
+
+    omega: float
+    objective: str
+    method: str
+    alpha_f: float
+    eta: float
+    value: float
+    evaluation: CycleEvaluation
+    n_solves: int
+    n_gradients: int
+    seconds: float
+    reason: str
+    history: np.ndarray = field(repr=False, default=None)
+
+
+def optimize_at_speed(design: FoilDesign, objective: str = "W_cb", method: str = "gradient",
+                      x0: tuple[float, float] | None = None, *, progress: bool = False,
+                      **options: Any) -> SpeedOptimum:
+    """Optimise (alpha_f, eta) at the design's current speed from ``x0`` (default: the design's params).
+
+    ``options`` go to :func:`gfbjax.optim.pattern_search` or :func:`gfbjax.optim.minimize_bounded`."""
+    _check(objective, method)
+    p = design.params
+    x0 = np.array(x0 if x0 is not None else (float(p.alpha_f), float(p.eta)), float)
+    n0, g0 = design.n_solves, design.n_gradients
+    rows: list[tuple[float, float, float]] = []
+    best: dict[str, Any] = {}
+    sign = -1.0 if objective == "W_cb" else 1.0  # minimise -W_cb or max|mu|
+
+    def keep(ev: CycleEvaluation) -> None:
+        v = objective_value(ev, objective)
+        rows.append((ev.alpha_f, ev.eta, v))
+        if not best or sign * v < sign * best["value"]:
+            best.update(value=v, ev=ev)
+
+    t0 = time.perf_counter()
+    if method == "pattern":
+        def fun(x: np.ndarray) -> float:
+            ev = design.evaluate(float(x[0]), float(x[1]))
+            keep(ev)
+            if objective == "W_cb":  # the paper's OBJ = 1/W_cb; a non-dissipating film is never an improvement
+                return 1.0 / ev.W_cb if ev.W_cb > 0 else float("inf")
+            return ev.max_mu
+
+        opts = dict(mesh0=1.0, mesh_tol=1e-6, max_iter=300)
+        opts.update(options)
+        res = pattern_search(fun, np.clip(x0, LO, HI), LO, HI, failures=(CycleNotConverged,), progress=progress,
+                             **opts)
+    else:
+        def fun_and_grad(x: np.ndarray) -> tuple[float, np.ndarray]:
+            ev = design.evaluate(float(x[0]), float(x[1]), gradient=True)
+            keep(ev)
+            if objective == "W_cb":
+                return -ev.W_cb, -np.asarray(ev.grad_W_cb)
+            return ev.max_mu, np.asarray(ev.grad_max_mu)
+
+        if method == "gradient":
+            res = minimize_log_box(fun_and_grad, np.clip(x0, LO, HI), LO, HI, failures=(CycleNotConverged,),
+                                   progress=progress, **options)
+        else:
+            res = minimize_bounded(fun_and_grad, np.clip(x0, LO * 1.0001, HI * 0.9999), LO, HI,
+                                   failures=(CycleNotConverged,), progress=progress, **options)
+    if not best:
+        raise CycleNotConverged(f"no cycle converged during the optimisation at Omega_bar = {design.omega}")
+    ev = best["ev"]
+    design.orbit = ev.orbit  # continue from the optimum's cycle
+    return SpeedOptimum(design.omega, objective, method, ev.alpha_f, ev.eta, best["value"], ev,
+                        design.n_solves - n0, design.n_gradients - g0, time.perf_counter() - t0, res.reason,
+                        np.array(rows))
+
+
+@dataclass
+class Schedule:
+    """Optimised foil schedule along the speed (paper Figs. 16-19): per speed the optimum (alpha_f, eta), the
+    objective, W_cb, max|mu|, stability, the journal's max/min over the cycle and the multipliers; ``reason``
+    says why the march ended; ``bifurcation_free_to`` is the last speed with a stable optimised cycle."""
+
+    objective: str
+    method: str
+    omega: list[float] = field(default_factory=list)
+    alpha_f: list[float] = field(default_factory=list)
+    eta: list[float] = field(default_factory=list)
+    W_cb: list[float] = field(default_factory=list)
+    max_mu: list[float] = field(default_factory=list)
+    stable: list[bool] = field(default_factory=list)
+    journal_max: list[np.ndarray] = field(default_factory=list)
+    journal_min: list[np.ndarray] = field(default_factory=list)
+    multipliers: list[np.ndarray] = field(default_factory=list)
+    n_solves: int = 0
+    n_gradients: int = 0
+    seconds: float = 0.0
+    reason: str = ""
+
+    @property
+    def bifurcation_free_to(self) -> float | None:
+        last = None
+        for w, s in zip(self.omega, self.stable):
+            if not s:
+                break
+            last = w
+        return last
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"objective": self.objective, "method": self.method, "Omega_bar": self.omega,
+                "alpha_f": self.alpha_f, "eta": self.eta, "W_cb": self.W_cb, "max_mu": self.max_mu,
+                "stable": self.stable, "journal_max": [a.tolist() for a in self.journal_max],
+                "journal_min": [a.tolist() for a in self.journal_min],
+                "multipliers_re": [np.real(a).tolist() for a in self.multipliers],
+                "multipliers_im": [np.imag(a).tolist() for a in self.multipliers],
+                "n_solves": self.n_solves, "n_gradients": self.n_gradients, "seconds": self.seconds,
+                "reason": self.reason, "bifurcation_free_to": self.bifurcation_free_to}
+
+
+def optimized_continuation(params: Params, omega_start: float, omega_end: float, d_omega: float = 0.025, *,
+                           objective: str = "max_mu", method: str = "gradient", x0: tuple[float, float] | None = None,
+                           m: int = 4, N: int = 16, linear_solver: str = "auto", progress: bool = False,
+                           callback: Callable[[SpeedOptimum], Any] | None = None, **options: Any) -> Schedule:
+    """March from ``omega_start`` to ``omega_end`` in steps ``d_omega`` (Omega_bar), optimising the foil at each
+    speed from the previous optimum and cycle (paper Sect. 3.3 steps a-f).  Ends at ``omega_end``, at the first
+    speed whose optimised cycle is unstable (recorded), or where no cycle converges; never loses the finished
+    speeds (also on KeyboardInterrupt)."""
+    _check(objective, method)
+    if not (isinstance(d_omega, (int, float)) and 0.0 < d_omega <= 1.0):
+        raise ParameterError(f"d_omega = {d_omega!r} is outside the allowed range (0, 1]")
+    if not (0.0 < omega_start < omega_end <= 50.0):
+        raise ParameterError(f"need 0 < omega_start < omega_end <= 50, got {omega_start!r}, {omega_end!r}")
+    design = FoilDesign(params, omega_start, m=m, N=N, linear_solver=linear_solver)
+    sched = Schedule(objective, method)
+    x = x0
+    speeds = np.arange(omega_start, omega_end + 1e-12, d_omega)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(speeds), desc=f"optimised continuation ({objective})")
+    t0 = time.perf_counter()
+    try:
+        for w in speeds:
+            design.set_speed(float(w))  # step (e): the last optimum's cycle, period 2 pi / Omega, predicts
+            try:
+                opt = optimize_at_speed(design, objective, method, x, **options)
+            except CycleNotConverged as e:
+                sched.reason = f"no cycle at Omega_bar = {w:.4f}: {e}"
+                break
+            ev = opt.evaluation
+            x = (opt.alpha_f, opt.eta)
+            lay_idx = _journal_columns(params)
+            U = np.asarray(ev.orbit.nodes())[..., lay_idx]
+            sched.omega.append(float(w))
+            sched.alpha_f.append(opt.alpha_f)
+            sched.eta.append(opt.eta)
+            sched.W_cb.append(ev.W_cb)
+            sched.max_mu.append(ev.max_mu)
+            sched.stable.append(ev.stable)
+            sched.journal_max.append(U.max(axis=(0, 1)))
+            sched.journal_min.append(U.min(axis=(0, 1)))
+            sched.multipliers.append(np.asarray(ev.multipliers))
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(alpha_f=f"{opt.alpha_f:.3g}", eta=f"{opt.eta:.3g}", max_mu=f"{ev.max_mu:.4f}")
+            if callback is not None:
+                callback(opt)
+            if not ev.stable:
+                sched.reason = f"the optimised cycle is unstable at Omega_bar = {w:.4f} (max|mu| = {ev.max_mu:.4f})"
+                break
+        else:
+            sched.reason = f"reached omega_end = {omega_end}"
+    except KeyboardInterrupt:
+        sched.reason = "interrupted"
+    finally:
+        if bar is not None:
+            bar.close()
+    sched.n_solves, sched.n_gradients = design.n_solves, design.n_gradients
+    sched.seconds = time.perf_counter() - t0
+    return sched
+
+
+def _journal_columns(params: Params) -> list[int]:
+    from .cycles import rotor_components
+
+    return rotor_components(params)[:2]
