@@ -27,8 +27,8 @@ import numpy as np
 from . import cont
 from .cont import collocation as col
 from .cont.floquet import nontrivial
-from .cont.implicit import (functional_derivatives, multiplier_derivatives,
-                            orbit_sensitivities)
+from .cont.implicit import (MultiplierModulus, adjoint_gradient, functional_derivatives,
+                            multiplier_derivatives, orbit_sensitivities)
 from .cycles import gfb_cycle_problem, linear_response_start
 from .energy import CycleEnergy, orbit_energy
 from .params import ParameterError, Params
@@ -86,19 +86,29 @@ class FoilDesign:
 
     m, N: collocation points and mesh intervals; linear_solver: as in :class:`gfbjax.cont.CycleSettings`
     ('auto': sparse on fine grids).  ``orbit``: a first guess (else the linear forced response at the given
-    params).  Counters: ``n_solves`` (cycle solves, failed ones included) and ``n_gradients``.
+    params).  ``gradient_mode``: 'adjoint' (one transposed solve per objective, dense backend only), 'tangent'
+    (one solve per design variable, both backends) or 'auto' (adjoint where the backend is dense).  Counters:
+    ``n_solves`` (cycle solves, failed ones included) and ``n_gradients``.
     """
 
     def __init__(self, params: Params, omega: float, *, m: int = 4, N: int = 16, linear_solver: str = "auto",
-                 orbit: col.Orbit | None = None, newton_tol: float = 1e-9, newton_max_iter: int = 10):
+                 orbit: col.Orbit | None = None, newton_tol: float = 1e-9, newton_max_iter: int = 10,
+                 gradient_mode: str = "auto"):
         if not (isinstance(omega, (int, float)) and 0.0 < omega <= 50.0):
             raise ParameterError(f"omega = {omega!r} is outside the allowed range (0, 50] (Omega_bar)")
+        if gradient_mode not in ("auto", "adjoint", "tangent"):
+            raise ParameterError(f"gradient_mode = {gradient_mode!r} is not one of ('auto', 'adjoint', 'tangent')")
         self.settings = cont.CycleSettings(m=m, N=N, linear_solver=linear_solver, newton_tol=newton_tol,
                                            newton_step_tol=newton_tol, newton_max_iter=newton_max_iter)
         self.params, self.omega = params, float(omega)
         self.scheme = col.Scheme(m)
         self._problem0 = gfb_cycle_problem(params)
-        cont.make_backend(self._problem0, self.scheme, self.settings)  # a bad solver choice fails here
+        dense = not hasattr(cont.make_backend(self._problem0, self.scheme, self.settings),  # bad solver fails here
+                            "linearise")
+        if gradient_mode == "adjoint" and not dense:
+            raise ParameterError("gradient_mode = 'adjoint' needs the dense backend (linear_solver='dense', or "
+                                 "'auto' on a small grid); use 'tangent' with the sparse backend")
+        self.gradient_mode = ("adjoint" if dense else "tangent") if gradient_mode == "auto" else gradient_mode
         if orbit is None:
             x_of_t, T, _ = linear_response_start(params, self.omega)
             orbit = col.orbit_from_function(x_of_t, T, self.omega, self.scheme, col.uniform_mesh(N))
@@ -144,7 +154,15 @@ class FoilDesign:
         ev = CycleEvaluation(float(alpha_f), float(eta), self.omega, orbit,
                              CycleEnergy(*(float(w) for w in orbit_energy(orbit, p))), mu,
                              float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(res.iterations))
-        if gradient:
+        if gradient and self.gradient_mode == "adjoint":
+            self.n_gradients += 1
+            g = adjoint_gradient(problem, orbit, self.scheme, W_cb_of)
+            mod = MultiplierModulus(problem.f, self.scheme)
+            _, a = mod.weights(problem, orbit)
+            gm = adjoint_gradient(problem, orbit, self.scheme, mod, a)
+            ev.grad_W_cb = np.array([float(getattr(g, k)) for k in DESIGN_VARIABLES])
+            ev.grad_max_mu = np.array([float(getattr(gm, k)) for k in DESIGN_VARIABLES])
+        elif gradient:
             self.n_gradients += 1
             dargs = self._directions(p)
             tangents = orbit_sensitivities(problem, backend, orbit, dargs, self.scheme)

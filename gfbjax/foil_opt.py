@@ -52,7 +52,7 @@ def objective_value(ev: CycleEvaluation, objective: str) -> float:
 @dataclass
 class SpeedOptimum:
     """Result of one optimisation at speed ``omega``: the best foil, its cycle, the counts and the history
-    (one row per evaluation: alpha_f, eta, objective value in physical form)."""
+    (one row per evaluation: alpha_f, eta, objective value in physical form, seconds since the start)."""
 
     omega: float
     objective: str
@@ -84,7 +84,7 @@ def optimize_at_speed(design: FoilDesign, objective: str = "W_cb", method: str =
 
     def keep(ev: CycleEvaluation) -> None:
         v = objective_value(ev, objective)
-        rows.append((ev.alpha_f, ev.eta, v))
+        rows.append((ev.alpha_f, ev.eta, v, time.perf_counter() - t0))
         if not best or sign * v < sign * best["value"]:
             best.update(value=v, ev=ev)
 

@@ -6,10 +6,9 @@ Newton in a single compiled, vmapped kernel (:func:`gfbjax.cont.batch.batched_ne
 the same batched quadrature.  Points where Newton does not converge from that start are NaN in the maps (and
 False in ``converged``).
 
-Known problem (not solved): with jax/jaxlib 0.10 on CPU the vmapped condensed step has dead-locked XLA:CPU
-intermittently (0 % CPU, no progress) on repeated calls in one process -- the same family of dead-lock as the scan
-kernel noted in :mod:`gfbjax.cont`.  A first call has completed (2 x 2 grid, Nx=16, Nz=2, N=8: 4/4 converged in
-5 iterations, agreeing with point-by-point solves); treat this module as experimental.
+``energy_map_loop`` computes the same map point by point (a Python loop over the same dense Newton corrector from
+the same start) for comparison: on a 2-core CPU the vmapped step costs about as much per member as the single
+step, because XLA:CPU runs the batched LAPACK calls one matrix at a time (see benchmarks/energy_maps.py).
 """
 from __future__ import annotations
 
@@ -26,17 +25,17 @@ from .cont import collocation as col
 from .cont.batch import batched_newton
 from .cycles import _f_cycles
 from .design import FoilDesign, check_foil
-from .energy import orbit_energy
+from .energy import cycle_energy, orbit_energy
 from .params import ParameterError, Params
 
-__all__ = ["EnergyMap", "energy_map"]
+__all__ = ["EnergyMap", "energy_map", "energy_map_loop"]
 
 
 @dataclass
 class EnergyMap:
     """W_cb and W_cf over the grid ``alpha_f`` x ``eta`` (arrays of shape (len(eta), len(alpha_f))) at speed
-    ``omega``; ``converged`` mask, Newton ``iterations`` and wall ``seconds`` of the batched sweep (including
-    its compilation on the first call for a grid size)."""
+    ``omega``; ``converged`` mask, Newton ``iterations`` and wall ``seconds`` of the sweep (including the
+    compilation on the first call for a grid size); ``member_steps``: Newton steps computed, padding included."""
 
     omega: float
     alpha_f: np.ndarray
@@ -46,6 +45,7 @@ class EnergyMap:
     converged: np.ndarray
     iterations: np.ndarray
     seconds: float
+    member_steps: int = 0
 
 
 def _with_foil(theta: jax.Array, base: Params) -> Params:
@@ -61,9 +61,7 @@ def _works(orbits, thetas, base):
     return jax.vmap(one)(orbits, thetas)
 
 
-def energy_map(params: Params, omega: float, alpha_f: Any, eta: Any, *, m: int = 4, N: int = 16,
-               max_iter: int = 15, tol: float = 1e-9) -> EnergyMap:
-    """W_cb and W_cf at every (alpha_f, eta) of the grid at Omega_bar = ``omega`` (see module docstring)."""
+def _grid(params: Params, omega: float, alpha_f: Any, eta: Any, m: int, N: int):
     a = np.asarray(alpha_f, float).ravel()
     e = np.asarray(eta, float).ravel()
     if a.size == 0 or e.size == 0:
@@ -75,14 +73,44 @@ def energy_map(params: Params, omega: float, alpha_f: Any, eta: Any, *, m: int =
     base = FoilDesign(params, omega, m=m, N=N, linear_solver="dense")
     start = base.evaluate(float(params.alpha_f), float(params.eta)).orbit
     A, E = np.meshgrid(a, e)
-    thetas = jnp.asarray(np.stack([A.ravel(), E.ravel()], axis=1))
-    t0 = time.perf_counter()
-    orbits, its, _, ok = batched_newton(_f_cycles, _with_foil, thetas, params, start, col.Scheme(m),
-                                        max_iter=max_iter, tol=tol)
-    W = np.array(_works(orbits, thetas, params))
-    sec = time.perf_counter() - t0
-    ok = np.asarray(ok)
+    return a, e, A.shape, np.stack([A.ravel(), E.ravel()], axis=1), start
+
+
+def _result(omega, a, e, shape, W, ok, its, sec, steps) -> EnergyMap:
+    W = np.array(W, float)
+    ok = np.asarray(ok, bool)
     W[~ok] = np.nan
-    shape = A.shape
     return EnergyMap(float(omega), a, e, W[:, 0].reshape(shape), W[:, 1].reshape(shape), ok.reshape(shape),
-                     np.asarray(its).reshape(shape), sec)
+                     np.asarray(its).reshape(shape), sec, int(steps))
+
+
+def energy_map(params: Params, omega: float, alpha_f: Any, eta: Any, *, m: int = 4, N: int = 16,
+               max_iter: int = 10, tol: float = 1e-9) -> EnergyMap:
+    """W_cb and W_cf at every (alpha_f, eta) of the grid at Omega_bar = ``omega`` by one batched sweep (see
+    module docstring); every point starts from the cycle of ``params``' own foil."""
+    a, e, shape, thetas, start = _grid(params, omega, alpha_f, eta, m, N)
+    t0 = time.perf_counter()
+    res = batched_newton(_f_cycles, _with_foil, jnp.asarray(thetas), params, start, col.Scheme(m),
+                         max_iter=max_iter, tol=tol, rtol_step=tol)
+    W = _works(res.orbits, jnp.asarray(thetas), params)
+    return _result(omega, a, e, shape, W, res.converged, res.iterations, time.perf_counter() - t0, res.steps)
+
+
+def energy_map_loop(params: Params, omega: float, alpha_f: Any, eta: Any, *, m: int = 4, N: int = 16,
+                    max_iter: int = 10, tol: float = 1e-9) -> EnergyMap:
+    """The same map as :func:`energy_map`, point by point: a Python loop over the dense Newton corrector
+    (:func:`gfbjax.cont.collocation.newton`) from the same start (the reference for the batched sweep)."""
+    a, e, shape, thetas, start = _grid(params, omega, alpha_f, eta, m, N)
+    scheme = col.Scheme(m)
+    con = col.natural_constraint(start, start.lam)
+    t0 = time.perf_counter()
+    W, ok, its, steps = [], [], [], 0
+    for th in thetas:
+        p = _with_foil(jnp.asarray(th), params)
+        r = col.newton(_f_cycles, p, start, con, scheme, tol=tol, rtol_step=tol, max_iter=max_iter)
+        E = cycle_energy(r.orbit, p)
+        W.append((float(E.W_cb), float(E.W_cf)))
+        ok.append(r.converged)
+        its.append(r.iterations)
+        steps += r.iterations + int(r.converged)
+    return _result(omega, a, e, shape, W, ok, its, time.perf_counter() - t0, steps)

@@ -147,8 +147,9 @@ def test_optimize_one_speed(tmp_path, capsys):
     lo_a, hi_a, lo_e, hi_e = 0.005, 2.0, 1e-4, 10.0
     assert lo_a <= d["alpha_f"] <= hi_a and lo_e <= d["eta"] <= hi_e
     rows = np.asarray(d["history"]["rows"])
-    assert d["history"]["columns"] == ["alpha_f", "eta", "max_mu"]
+    assert d["history"]["columns"] == ["alpha_f", "eta", "max_mu", "seconds"]
     assert 1 <= len(rows) <= d["n_solves"] and rows[:, 2].min() == d["objective_value"]
+    assert np.all(np.diff(rows[:, 3]) >= 0) and rows[-1, 3] <= d["seconds"]
     assert d["x0"] == {"alpha_f": 0.1, "eta": 0.05}  # the reference system's own foil
     assert "optimum" in stdout and "cycle solves" in stdout
 

@@ -182,7 +182,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
     design = FoilDesign(params, args.speed, m=args.m, N=args.N)
     opt = optimize_at_speed(design, args.objective, args.method, x0, progress=not args.quiet, **options)
     ev = opt.evaluation
-    hist = np.asarray(opt.history, float).reshape(-1, 3)
+    hist = np.asarray(opt.history, float).reshape(-1, 4)
     mods = np.sort(np.abs(np.asarray(ev.multipliers)))[::-1]
     print("\n".join([
         f"  optimum           alpha_f = {opt.alpha_f:.6g}, eta = {opt.eta:.6g}",
@@ -198,7 +198,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
         "max_mu": ev.max_mu, "stable": ev.stable, "energy": ev.energy._asdict(),
         "multiplier_moduli": mods[:8], "n_solves": opt.n_solves, "n_gradients": opt.n_gradients,
         "seconds": opt.seconds, "reason": opt.reason,
-        "history": {"columns": ["alpha_f", "eta", args.objective], "rows": hist},
+        "history": {"columns": ["alpha_f", "eta", args.objective, "seconds"], "rows": hist},
     }
     fig = None if args.no_figures else _plot_optimum(hist, x0, opt, args, spec)
     _finish(out, "optimum", data, fig, t0)

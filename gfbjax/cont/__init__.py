@@ -14,12 +14,16 @@ package therefore appends ``--xla_cpu_enable_concurrency_optimized_scheduler=fal
 to ``XLA_FLAGS`` unless the flag is already set.  This only takes effect if
 the JAX backend has not been initialised yet (import ``gfbjax.cont`` before
 running any JAX computation, or set the flag in the environment yourself).
+For the same reason it sets ``NPROC`` (XLA:CPU's intra-op pool size) to max(8, cpu_count + 4) unless set: jaxlib's
+batched LAPACK kernels block on sub-tasks in that pool and hang when as many of them run at once as it has threads
+(two on a 2-core machine); see :mod:`gfbjax`.
 """
 import os as _os
 
 if "xla_cpu_enable_concurrency_optimized_scheduler" not in _os.environ.get("XLA_FLAGS", ""):
     _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "")
                                 + " --xla_cpu_enable_concurrency_optimized_scheduler=false").strip()
+_os.environ.setdefault("NPROC", str(max(8, (_os.cpu_count() or 1) + 4)))
 
 from .branch import Branch, PointRecord
 from .collocation import (Constraint, NewtonResult, Orbit, Scheme, dense_newton_step, natural_constraint,

@@ -386,11 +386,12 @@ def condense(blocks: Blocks, c: jax.Array) -> Condensed:
     R1 = R[:, :k, :]
     Qt = jnp.swapaxes(Q, -1, -2)
     Q1t, Q2t = Qt[:, :k], Qt[:, k:]
-    solve = jax.vmap(lambda R_, B_: solve_triangular(R_, B_, lower=False))
-    w0 = solve(R1, Q1t @ c)
-    WL = -solve(R1, Q1t @ AL)
-    WR = -solve(R1, Q1t @ AR)
-    Wp = -solve(R1, Q1t @ Bp)
+    # One triangular solve for all four right-hand sides: four independent batched LAPACK calls can run
+    # concurrently and then dead-lock jaxlib's CPU kernels, which wait on the same thread pool they schedule to.
+    n, kc = AL.shape[-1], c.shape[-1]
+    W = jax.vmap(lambda R_, B_: solve_triangular(R_, B_, lower=False))(
+        R1, Q1t @ jnp.concatenate([c, AL, AR, Bp], axis=-1))
+    w0, WL, WR, Wp = W[..., :kc], -W[..., kc:kc + n], -W[..., kc + n:kc + 2 * n], -W[..., kc + 2 * n:]
     return Condensed(Q2t @ AL, Q2t @ AR, Q2t @ Bp, Q2t @ c, w0, WL, WR, Wp)
 
 

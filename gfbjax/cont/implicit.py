@@ -17,12 +17,21 @@ linearised collocation equations: with :math:`\Phi` the variational solution sta
 second-order ``jax.jvp`` of the collocation residual; dense backend: ``jax.jvp`` of the product of the transfer
 matrices.  Left eigenvectors: ARPACK on :math:`M^T` (transposed sweeps) or ``scipy.linalg.eig``.
 
-Forward (tangent) mode is used rather than the adjoint: with p design parameters it costs p condensed solves per
-orbit for *all* functionals at once; for the two foil properties and two objectives it equals the adjoint's cost
-and reuses the factorisation and solver of the corrector unchanged.
+Two modes.  *Tangent* (``orbit_sensitivities`` + ``functional_derivatives`` / ``multiplier_derivatives``): one
+condensed solve per parameter direction, for all functionals at once; the only mode of the sparse backend.
+*Adjoint* (``adjoint_gradient``, dense backend): one transposed condensed solve per functional,
+
+.. math:: J^T\lambda = \partial F/\partial u,\qquad \frac{dF}{d\theta} = \frac{\partial F}{\partial\theta}
+          - \lambda^T \frac{\partial G}{\partial\theta},
+
+giving the gradient with respect to *every* leaf of ``args`` at once.  The transposed solve is the pullback
+(``jax.vjp``) of the corrector's own condensed solve, linear in its right-hand side, so J is never formed.  The
+modulus of the leading multiplier enters as the functional ``Re(conj(mu) w^T M(u, theta) v / (w^T v)) / |mu|``
+with the eigenvectors held fixed, whose total derivative is d|mu| (first-order perturbation of a simple eigenvalue).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import partial
 from typing import Any, Callable, Sequence
 
@@ -36,7 +45,8 @@ from . import collocation as col
 from .floquet import trivial_index
 from .problem import CycleProblem
 
-__all__ = ["orbit_sensitivities", "functional_derivatives", "multiplier_derivatives", "leading_nontrivial"]
+__all__ = ["orbit_sensitivities", "functional_derivatives", "multiplier_derivatives", "leading_nontrivial",
+           "adjoint_gradient", "MultiplierModulus"]
 
 
 @partial(jax.jit, static_argnums=(0, 4))
@@ -163,3 +173,55 @@ def multiplier_derivatives(problem: CycleProblem, backend: Any, orbit: col.Orbit
     if hasattr(backend, "linearise"):
         return _sparse_multiplier(problem, backend, orbit, scheme, tangents, dargs)
     return _dense_multiplier(problem, orbit, scheme, tangents, dargs)
+
+
+# ---------------------------------------------------------------- adjoint (dense backend)
+@partial(jax.jit, static_argnums=(0, 1, 5))
+def _adjoint(f, F, args, orbit, data, scheme):
+    con = col.natural_constraint(orbit, orbit.lam)
+    Fu, Fa = jax.grad(lambda o, a: F(o, a) if data is None else F(o, a, data), argnums=(0, 1))(orbit, args)
+
+    def solve(rc, rper, rs):  # J^{-1}, linear in the right-hand side
+        dxm, dw, dp = col.linear_solve_multi(f, args, orbit, con, scheme, rc[..., None], rper[:, None],
+                                             rs[:, None])
+        return dxm[..., 0], dw[..., 0], dp[:, 0]
+
+    z = orbit.xm.dtype
+    zeros = (jnp.zeros((orbit.N, scheme.m, orbit.n), z), jnp.zeros((orbit.n,), z), jnp.zeros((2,), z))
+    lam_c = jax.vjp(solve, *zeros)[1]((Fu.xm, Fu.xi, jnp.stack([Fu.T, Fu.lam])))[0]  # J^-T F_u, collocation rows
+    # Only the collocation rows depend on args (periodicity, phase and lam rows do not).
+    G_a = jax.vjp(lambda a: col.collocation_residual(f, a, orbit, scheme), args)[1](lam_c)[0]
+    return jax.tree_util.tree_map(lambda x, y: x - y, Fa, G_a)
+
+
+def adjoint_gradient(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, F: Callable[..., Any],
+                     data: Any = None) -> Any:
+    """dF/d(args) of a scalar pure-JAX functional ``F(orbit, args)`` (or ``F(orbit, args, data)`` with a traced
+    pytree ``data``) along the solution at fixed lam, by one transposed condensed solve (dense backend): a
+    pytree like ``problem.args``.  ``F`` is a static argument of the compiled kernel: keep the same object."""
+    return _adjoint(problem.f, F, problem.args, orbit, data, scheme)
+
+
+@dataclass(frozen=True)
+class MultiplierModulus:
+    """The functional ``Re(sum_ij a_ij M_ij(orbit, args))`` with M the monodromy matrix: for
+    ``a = conj(mu) (w v^T) / (|mu| w^T v)`` (from :meth:`weights`) its total derivative is d|mu| of the simple
+    multiplier mu with right/left eigenvectors v, w.  Use as ``adjoint_gradient(..., MultiplierModulus(f, scheme),
+    data=a)``."""
+
+    f: Callable
+    scheme: col.Scheme
+
+    def __call__(self, orbit: col.Orbit, args: Any, a: jax.Array) -> jax.Array:
+        return jnp.real(jnp.sum(a * _monodromy(self.f, args, orbit, self.scheme)))
+
+    def weights(self, problem: CycleProblem, orbit: col.Orbit) -> tuple[complex, jax.Array]:
+        """The leading non-trivial multiplier mu of ``orbit`` and the weights ``a`` (dense eigen-decomposition)."""
+        M = np.asarray(_monodromy_jit(self.f, problem.args, orbit, self.scheme))
+        ev, vl, vr = sla.eig(M, left=True, right=True)
+        i = leading_nontrivial(ev, problem.n_trivial)
+        mu, v, w = ev[i], vr[:, i], vl[:, i].conj()
+        return mu, jnp.asarray(np.outer(w, v) * np.conj(mu) / (abs(mu) * (w @ v)))
+
+
+_monodromy_jit = jax.jit(_monodromy, static_argnums=(0, 3))
