@@ -118,8 +118,10 @@ class FoilDesign:
         self._dargs = None
 
     def _at_speed(self, orbit: col.Orbit) -> col.Orbit:
-        return col.Orbit(orbit.mesh, orbit.xm, orbit.xi, jnp.asarray(2 * np.pi / self.omega),
-                         jnp.asarray(self.omega))
+        # Explicit dtype: a weakly typed T or lam would compile every kernel a second time for the Newton iterates.
+        z = orbit.xm.dtype
+        return col.Orbit(orbit.mesh, orbit.xm, orbit.xi, jnp.asarray(2 * np.pi / self.omega, dtype=z),
+                         jnp.asarray(self.omega, dtype=z))
 
     def set_speed(self, omega: float, orbit: col.Orbit | None = None) -> None:
         """Move to another speed; the next solve starts from ``orbit`` (default: the last cycle, period
