@@ -45,6 +45,7 @@ __all__ = [
     "float_list",
     "check_option",
     "write_json",
+    "write_summary",
     "to_jsonable",
 ]
 
@@ -233,6 +234,14 @@ def to_jsonable(obj: Any) -> Any:
 
 def write_json(path: Path, data: Any) -> Path:
     path.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
+    return path
+
+
+def write_summary(out: Path, name: str, data: dict) -> Path:
+    """Write a command's summary ``out/name`` and report ``data['files']`` and ``data['timings_s']['total']``."""
+    path = write_json(out / name, data)
+    print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
+          flush=True)
     return path
 
 

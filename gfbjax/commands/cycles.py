@@ -11,7 +11,7 @@ from typing import Any
 
 from ..params import ParameterError
 from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
-                      traced_params, write_json)
+                      traced_params, write_summary)
 
 NAME = "cycles"
 
@@ -256,7 +256,5 @@ def run(args: argparse.Namespace) -> int:
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "figures": t_fig,
                       "total": time.perf_counter() - t0},
     }
-    write_json(out / "cycles.json", data)
-    print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
-          flush=True)
+    write_summary(out, "cycles.json", data)
     return 0 if ok else 1

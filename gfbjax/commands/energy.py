@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from . import cycles as _cycles
-from ._common import output_dir, spec_from_args, traced_params, write_json
+from ._common import output_dir, spec_from_args, traced_params, write_summary
 
 NAME = "energy"
 
@@ -160,7 +160,5 @@ def run(args: argparse.Namespace) -> int:
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "energy": t_energy,
                       "total": time.perf_counter() - t0},
     }
-    write_json(out / "energy.json", data)
-    print(f"  wrote             {out}/: " + ", ".join(data["files"]) + f"  ({data['timings_s']['total']:.1f} s)",
-          flush=True)
+    write_summary(out, "energy.json", data)
     return 0 if ok else 1

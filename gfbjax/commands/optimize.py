@@ -9,7 +9,7 @@ import time
 from typing import Any
 
 from ..params import ParameterError
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
 
 NAME = "optimize"
 
@@ -169,8 +169,7 @@ def _finish(out: Any, name: str, data: dict[str, Any], figure: Any, t0: float) -
         files.append(name + ".png")
     data = {**data, "gfbjax_version": gfbjax.__version__, "files": files,
             "timings_s": {"total": time.perf_counter() - t0}}
-    write_json(out / f"{name}.json", data)
-    print(f"  wrote             {out}/: " + ", ".join(files) + f"  ({data['timings_s']['total']:.1f} s)", flush=True)
+    write_summary(out, f"{name}.json", data)
 
 
 def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:

@@ -35,11 +35,12 @@ class BatchNewtonResult(NamedTuple):
 
 @partial(jax.jit, static_argnums=(0, 1, 6))
 def _step(f, make_args, thetas, base, orbits, con, scheme):
-    """One Newton step of every member (vmapped): (new orbits, residual norm at the old, step norm).  ``con``
-    (shared) fixes lam and the phase against the common start, as collocation.newton does."""
+    """One Newton step of every member (vmapped): (new orbits, residual norm at the old, step norm, max|x| of the
+    new mesh values).  ``con`` (shared) fixes lam and the phase against the common start, as collocation.newton
+    does."""
     def one(theta, o):
         new, rn, dn, _ = col._step_and_tangent(f, make_args(theta, base), o, con, scheme)
-        return new, rn, dn
+        return new, rn, dn, jnp.max(jnp.abs(new.xm))
 
     return jax.vmap(one)(thetas, orbits)
 
@@ -72,9 +73,9 @@ def batched_newton(f: Callable, make_args: Callable[[jax.Array, Any], Any], thet
         size = 1 << int(np.ceil(np.log2(run.size)))
         idx = np.concatenate([run, np.full(size - run.size, run[0])])
         sub = _take(orbits, idx)
-        new, rn, dn = jax.device_get(_step(f, make_args, thetas[idx], base, sub, con, scheme))
+        new, rn, dn, xmax = _step(f, make_args, thetas[idx], base, sub, con, scheme)  # orbits stay on the device
         steps += size
-        rn, dn = np.asarray(rn)[:run.size], np.asarray(dn)[:run.size]
+        rn, dn, xmax = (np.asarray(a)[:run.size] for a in (rn, dn, xmax))
         upd = np.zeros(k, bool)
         for j, i in enumerate(run):
             if state[i] == 1:  # residual at the accepted iterate, tested as in collocation.newton
@@ -93,8 +94,7 @@ def batched_newton(f: Callable, make_args: Callable[[jax.Array, Any], Any], thet
             best[i] = min(best[i], dn[j])
             upd[i] = True
             rn_out[i] = rn[j]
-            xmax = float(np.max(np.abs(np.asarray(new.xm[j]))))
-            if dn[j] <= rtol_step * (1.0 + xmax):
+            if dn[j] <= rtol_step * (1.0 + xmax[j]):
                 state[i] = 1
         if upd.any():
             pos = np.full(k, -1)
@@ -102,7 +102,7 @@ def batched_newton(f: Callable, make_args: Callable[[jax.Array, Any], Any], thet
             src = jnp.asarray(np.where(upd, pos, 0))
             mask = jnp.asarray(upd)
             orbits = jax.tree_util.tree_map(
-                lambda o, n: jnp.where(mask.reshape((k,) + (1,) * (o.ndim - 1)), jnp.asarray(n)[src], o),
+                lambda o, n: jnp.where(mask.reshape((k,) + (1,) * (o.ndim - 1)), n[src], o),
                 orbits, new)
     ok = state == 2
     return BatchNewtonResult(orbits, its, rn_out, ok, steps)
