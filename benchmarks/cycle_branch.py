@@ -25,7 +25,7 @@ import numpy as np
 
 from gfbjax import cont
 from gfbjax.cont import collocation as col
-from gfbjax.cycles import continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem, linear_response_start
+from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem, linear_response_start
 
 RESULTS = Path(__file__).resolve().parent / "results"
 

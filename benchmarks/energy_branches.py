@@ -3,7 +3,7 @@ changes sign at the first Neimark-Sacker bifurcation (issue 5, item 1).
 
 Designs (Fig. 12): a) k_s 3, b) alpha_f 0.01, c) eta 0.5 (all G6.3), d) the reference foil with G2.5.  For each,
 the synchronous cycle branch Omega_bar 0.05 -> 1.0 on the default grid with its states, W_fu, W_B, W_cf, W_cb by
-the collocation quadrature (``gfbjax.energy``), the NS speeds and the speeds where W_cb changes sign.  The JSON
+the collocation quadrature (``gfbjax.analyses.energy``), the NS speeds and the speeds where W_cb changes sign.  The JSON
 reports both, and their difference, whatever it is.
 
 Usage:  python benchmarks/energy_branches.py [--nx 48 --nz 8] [--designs ks3 af0.01 eta0.5 G2.5]
@@ -20,9 +20,9 @@ from pathlib import Path
 import gfbjax
 import numpy as np
 
-from gfbjax.cycles import continue_gfb_cycles, default_cycle_settings
-from gfbjax.energy import branch_energy, sign_changes
-from gfbjax.plot_branch import plot_energy
+from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
+from gfbjax.analyses.energy import branch_energy, sign_changes
+from gfbjax.plot.branch import plot_energy
 
 RESULTS = Path(__file__).resolve().parent / "results"
 FIGURES = Path(__file__).resolve().parent.parent / "docs" / "figures"

@@ -1,7 +1,7 @@
 """Maps of W_cb and W_cf over (alpha_f, eta) at Omega_bar = 0.2, 0.4, 0.6 (issue 5, item 6; paper Figs. 13-14):
-one batched (vmapped) Newton sweep warm-started from the reference foil's cycle (:func:`gfbjax.maps.energy_map`),
+one batched (vmapped) Newton sweep warm-started from the reference foil's cycle (:func:`gfbjax.design.maps.energy_map`),
 timed against a Python loop over the same points with the same start and the same dense Newton corrector
-(:func:`gfbjax.maps.energy_map_loop`).  Both runs are timed after compilation.
+(:func:`gfbjax.design.maps.energy_map_loop`).  Both runs are timed after compilation.
 
 Usage:  python benchmarks/energy_maps.py [--nx 16 --nz 2] [--k 8] [--speeds 0.2 0.4 0.6]
 Writes benchmarks/results/energy_maps.json and energy_maps.png.
@@ -16,8 +16,8 @@ from pathlib import Path
 import gfbjax
 import numpy as np
 
-from gfbjax.design import FOIL_BOUNDS
-from gfbjax.maps import energy_map, energy_map_loop
+from gfbjax.design.evaluate import FOIL_BOUNDS
+from gfbjax.design.maps import energy_map, energy_map_loop
 
 RESULTS = Path(__file__).resolve().parent / "results"
 

@@ -3,7 +3,7 @@ limit-cycle solves and wall time to the optimum, both objectives, at Omega_bar =
 
 Both methods start from the reference foil (alpha_f 0.1, eta 0.05) inside the bounds of Appendix A2, warm-start
 every cycle from the previous one and stop on their own criteria (pattern search: mesh < 1e-6 or 300 iterations;
-gradient: first-order optimality on the box, :func:`gfbjax.optim.minimize_log_box`).  A gradient evaluation is
+gradient: first-order optimality on the box, :func:`gfbjax.design.optimizers.minimize_log_box`).  A gradient evaluation is
 one cycle solve plus the implicit derivatives of W_cb and max|mu|; it counts as one solve and one gradient.  The
 gradient optimum "matches" when its objective is within 0.5% of the pattern search's.  Two counts are reported:
 to each method's own stopping rule, and to the first evaluation within 0.5% of the better of the two optima
@@ -28,8 +28,8 @@ from pathlib import Path
 import gfbjax
 import numpy as np
 
-from gfbjax.design import FoilDesign
-from gfbjax.foil_opt import optimize_at_speed
+from gfbjax.design.evaluate import FoilDesign
+from gfbjax.design.schedule import optimize_at_speed
 
 RESULTS = Path(__file__).resolve().parent / "results"
 

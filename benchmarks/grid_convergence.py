@@ -20,7 +20,7 @@ from the next coarser reference grid where they oscillate (no extrapolation is m
 
 How the solves are done (all from the project's vector field ``gfbjax.model.balanced_vector_field``):
 
-* one cold solve with :func:`gfbjax.static.solve_equilibrium` (load homotopy) on a small base grid at
+* one cold solve with :func:`gfbjax.analyses.static.solve_equilibrium` (load homotopy) on a small base grid at
   ``Omega = 0.3``, then a speed sweep on that grid (natural continuation, secant predictor, step halving);
 * every other grid is started at each speed from the solution of the nearest already solved grid at the same
   speed, interpolated (pressure field and foil strips, rotor copied); should that Newton fail, the grid falls back
@@ -65,7 +65,7 @@ from scipy.interpolate import RegularGridInterpolator  # noqa: E402
 
 import gfbjax  # noqa: E402  (turns on x64)
 from gfbjax.model import balanced_vector_field, layout  # noqa: E402
-from gfbjax.static import solve_equilibrium  # noqa: E402
+from gfbjax.analyses.static import solve_equilibrium  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from gfbjax.cont import collocation as col
 from gfbjax.cont.sparse_colloc import SparseCollocation
-from gfbjax.cycles import gfb_cycle_problem, linear_response_start
+from gfbjax.analyses.cycles import gfb_cycle_problem, linear_response_start
 
 RESULTS = Path(__file__).resolve().parent / "results"
 OMEGA = 0.3

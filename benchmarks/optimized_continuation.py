@@ -5,7 +5,7 @@ Cases: k_s 0.3, 1, 3 with G2.5 (Figs. 16, 18) and G1, G2.5, G6.3 with k_s 1 (Fig
 
 * fixed design: the synchronous cycle branch from ``--start`` upward with the reference foil (alpha_f 0.1,
   eta 0.05); its first bifurcation (or first unstable point) ends the bifurcation-free range;
-* optimised schedule (:func:`gfbjax.foil_opt.optimized_continuation`, steps a-f): at each speed, starting from the
+* optimised schedule (:func:`gfbjax.design.schedule.optimized_continuation`, steps a-f): at each speed, starting from the
   previous optimum and cycle, the foil minimising max|mu| (OBJ2) inside the bounds of Appendix A2; the march
   stops at the first speed where the best admissible foil leaves the cycle unstable.
 
@@ -24,9 +24,9 @@ from pathlib import Path
 import gfbjax
 import numpy as np
 
-from gfbjax.cycles import continue_gfb_cycles, default_cycle_settings
-from gfbjax.foil_opt import optimized_continuation
-from gfbjax.plot_branch import plot_schedule
+from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
+from gfbjax.design.schedule import optimized_continuation
+from gfbjax.plot.branch import plot_schedule
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CASES = {"ks0.3 G2.5": dict(k_s_bar=0.3, G=2.5), "ks1 G2.5": dict(G=2.5), "ks3 G2.5": dict(k_s_bar=3.0, G=2.5),

@@ -9,7 +9,7 @@ The synchronous (1X) unbalance response of the reference system at Omega_bar = 0
    caches are cleared, a first solve compiles, then the same solve from the same guess is repeated; the minimum
    is reported, the compile time separately).  The leading Floquet multipliers (Arnoldi on the cached
    linearisation, as continuation does) are timed separately.
-2. by brute force: diffrax time integration (``gfbjax.transient.simulate``, Kvaerno5, constant speed) from
+2. by brute force: diffrax time integration (``gfbjax.analyses.transient.simulate``, Kvaerno5, constant speed) from
    (i) the static equilibrium and (ii) the 0.29 cycle's state at unbalance phase 0, one revolution per call, until
    the journal over the last revolution agrees with the reference to the collocation's error (see below), at most
    ``--max-revs`` revolutions.  The solver tolerance is the loosest of rtol in {1e-5, ..., 1e-9} (atol = rtol/100)
@@ -77,11 +77,11 @@ from scipy.integrate import solve_bvp  # noqa: E402
 
 from gfbjax import cont  # noqa: E402
 from gfbjax.cont.palc import SPARSE_MIN_N, DenseBackend, make_backend  # noqa: E402
-from gfbjax.cycles import (default_cycle_settings, gfb_cycle_problem, linear_response_start,  # noqa: E402
+from gfbjax.analyses.cycles import (default_cycle_settings, gfb_cycle_problem, linear_response_start,  # noqa: E402
                            rotor_components)
 from gfbjax.model import forced_vector_field  # noqa: E402
 from gfbjax.params import Params  # noqa: E402
-from gfbjax.transient import TransientSettings, as_traced, default_initial_state, simulate  # noqa: E402
+from gfbjax.analyses.transient import TransientSettings, as_traced, default_initial_state, simulate  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 OMEGA = 0.3

@@ -29,7 +29,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 import gfbjax  # noqa: E402
 from gfbjax.model import runup_vector_field  # noqa: E402
-from gfbjax.transient import TransientSettings, as_traced, default_initial_state, simulate  # noqa: E402
+from gfbjax.analyses.transient import TransientSettings, as_traced, default_initial_state, simulate  # noqa: E402
 
 
 def main() -> None:

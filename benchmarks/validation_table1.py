@@ -19,7 +19,7 @@ import gfbjax
 import numpy as np
 
 from gfbjax import cont
-from gfbjax.cycles import (continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings,
+from gfbjax.analyses.cycles import (continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings,
                            hopf_criticality)
 
 RESULTS = Path(__file__).resolve().parent / "results"

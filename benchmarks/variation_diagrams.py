@@ -21,7 +21,7 @@ import gfbjax
 import numpy as np
 
 from gfbjax import cont
-from gfbjax.cycles import continue_gfb_cycles, continue_gfb_equilibria
+from gfbjax.analyses.cycles import continue_gfb_cycles, continue_gfb_equilibria
 
 RESULTS = Path(__file__).resolve().parent / "results"
 DESIGNS = ["reference", "ks0.3", "ks3", "af0.01", "af1", "eta0.005", "eta0.5", "G1", "G2.5"]

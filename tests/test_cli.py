@@ -144,7 +144,7 @@ def test_toml_config(tmp_path, capsys):
     bad.write_text('base = "af1"\nalpha = 0.2\n')
     code, _, err = _run(["static", "--system", str(bad), *SMALL, "--out", str(tmp_path / "o")], capsys)
     assert code == 2 and "alpha" in err
-    from gfbjax.commands._common import parse_set
+    from gfbjax.cli.commands._common import parse_set
 
     assert parse_set(["e_u=none", "Nx=32", "rotor=rigid", "theta0=pi/2"]) == {
         "e_u": None, "Nx": 32, "rotor": "rigid", "theta0": pytest.approx(1.5707963267948966)}

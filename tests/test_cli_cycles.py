@@ -83,7 +83,7 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
     assert "special points" in stdout
 
     # the branch file is what `gfbjax runup --cycles` overlays on the run-up (paper Fig. 7a/b)
-    from gfbjax.commands.runup import _cycle_overlay
+    from gfbjax.cli.commands.runup import _cycle_overlay
 
     ov = _cycle_overlay(str(out / "branch.npz"))
     np.testing.assert_array_equal(ov["speed"], lam)

@@ -26,17 +26,17 @@ def _run(argv, capsys):
 @pytest.fixture
 def no_computation(monkeypatch):
     """Fail the test if a command gets as far as computing a cycle or a design."""
-    import gfbjax.cycles
-    import gfbjax.design
-    import gfbjax.foil_opt
+    import gfbjax.analyses.cycles
+    import gfbjax.design.evaluate
+    import gfbjax.design.schedule
 
     def boom(*a, **k):
         raise AssertionError("computation started before the options were checked")
 
-    monkeypatch.setattr(gfbjax.cycles, "continue_gfb_cycles", boom)
-    monkeypatch.setattr(gfbjax.design, "FoilDesign", boom)
-    monkeypatch.setattr(gfbjax.foil_opt, "optimized_continuation", boom)
-    monkeypatch.setattr(gfbjax.foil_opt, "optimize_at_speed", boom)
+    monkeypatch.setattr(gfbjax.analyses.cycles, "continue_gfb_cycles", boom)
+    monkeypatch.setattr(gfbjax.design.evaluate, "FoilDesign", boom)
+    monkeypatch.setattr(gfbjax.design.schedule, "optimized_continuation", boom)
+    monkeypatch.setattr(gfbjax.design.schedule, "optimize_at_speed", boom)
 
 
 def test_help_lists_options(capsys):
@@ -54,15 +54,15 @@ def test_help_lists_options(capsys):
 
 
 def test_choices_and_defaults_agree_with_the_library():
-    from gfbjax.commands import optimize
-    from gfbjax.foil_opt import METHODS, OBJECTIVES
+    from gfbjax.cli.commands import optimize
+    from gfbjax.design.schedule import METHODS, OBJECTIVES
 
     assert optimize.OBJECTIVES == OBJECTIVES and optimize.METHODS == METHODS
     parser, _ = build_parser()
     # energy takes the options of cycles from a private copy: the cycles command keeps its own default folder
     assert parser.parse_args(["cycles"]).out == Path("results") / "cycles"
     args = parser.parse_args(["energy"])
-    assert args.out == Path("results") / "energy" and args.func.__module__ == "gfbjax.commands.energy"
+    assert args.out == Path("results") / "energy" and args.func.__module__ == "gfbjax.cli.commands.energy"
     args = parser.parse_args(["optimize", "--speed", "0.3"])
     assert (args.objective, args.method, args.x0) == ("max_mu", "gradient", None)
 
@@ -178,8 +178,8 @@ def test_plot_schedule_marks_unstable_points(tmp_path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gfbjax.foil_opt import Schedule
-    from gfbjax.plot_branch import plot_schedule
+    from gfbjax.design.schedule import Schedule
+    from gfbjax.plot.branch import plot_schedule
 
     s = Schedule("max_mu", "gradient")
     for i, w in enumerate([0.3, 0.32, 0.34]):

@@ -1,5 +1,5 @@
 """Implicit sensitivities of W_cb and of the leading Floquet multiplier modulus with respect to the foil
-properties (gfbjax.design, gfbjax.cont.implicit), against central finite differences of re-converged cycles;
+properties (gfbjax.design.evaluate, gfbjax.cont.implicit), against central finite differences of re-converged cycles;
 the sparse path against the dense one.  Small grid (Nx=16, Nz=2), Omega_bar = 0.3.
 
 The dense design uses the adjoint mode (one transposed condensed solve per objective), the sparse one the tangent
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import gfbjax
-from gfbjax.design import FoilDesign
+from gfbjax.design.evaluate import FoilDesign
 from gfbjax.params import ParameterError
 
 A, E = 0.1, 0.05

@@ -1,4 +1,4 @@
-"""Energy of limit cycles (gfbjax.energy, paper Eq. 23-24): the identity W_fu = W_B, an independent polyline
+"""Energy of limit cycles (gfbjax.analyses.energy, paper Eq. 23-24): the identity W_fu = W_B, an independent polyline
 evaluation of the same works from positions (not the velocity states the quadrature uses), W_cf >= 0, and the
 convergence of the collocation quadrature under mesh refinement.  Small grid (Nx=16, Nz=2)."""
 from __future__ import annotations
@@ -9,8 +9,8 @@ import pytest
 import gfbjax
 from gfbjax import cont
 from gfbjax.cont import collocation as col
-from gfbjax.cycles import continue_gfb_cycles, default_cycle_settings
-from gfbjax.energy import branch_energy, cycle_energy, sign_changes
+from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
+from gfbjax.analyses.energy import branch_energy, cycle_energy, sign_changes
 from gfbjax.model import layout
 from gfbjax.model.reynolds import bearing_force, gauge, mean_gauge_pressure
 

@@ -1,9 +1,9 @@
-"""Foil optimisation (gfbjax.foil_opt) on a small grid (Nx=16, Nz=2).
+"""Foil optimisation (gfbjax.design.schedule) on a small grid (Nx=16, Nz=2).
 
 The gradient-based optimiser (implicit gradients, projected quasi-Newton in log variables) must land on the
 optimum that the derivative-free pattern search of the paper (Appendix A2) finds independently, with fewer
-cycle solves.  (The vmapped map sweep of gfbjax.maps has no test here: its compiled kernel dead-locks XLA:CPU
-intermittently, see gfbjax/maps.py.)
+cycle solves.  (The vmapped map sweep of gfbjax.design.maps has no test here: its compiled kernel dead-locks XLA:CPU
+intermittently, see gfbjax/design/maps.py.)
 """
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import gfbjax
-from gfbjax.design import FoilDesign
-from gfbjax.foil_opt import optimize_at_speed, optimized_continuation
+from gfbjax.design.evaluate import FoilDesign
+from gfbjax.design.schedule import optimize_at_speed, optimized_continuation
 from gfbjax.params import ParameterError
 
 

@@ -30,9 +30,9 @@ from scipy.integrate import solve_ivp
 import gfbjax
 from gfbjax import cont
 from gfbjax.cont.floquet import nontrivial, trivial_error
-from gfbjax.cycles import gfb_cycle_problem, linear_response_start, rotor_components
+from gfbjax.analyses.cycles import gfb_cycle_problem, linear_response_start, rotor_components
 from gfbjax.model import forced_vector_field
-from gfbjax.transient import TransientSettings, simulate
+from gfbjax.analyses.transient import TransientSettings, simulate
 
 M_COLL, N_COLL = 4, 16
 SAMPLES = 32          # samples per revolution of the transient (phase 2 pi k / SAMPLES)

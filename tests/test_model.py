@@ -12,7 +12,7 @@ import pytest
 
 import gfbjax
 from gfbjax.model import balanced_vector_field, forced_vector_field, layout, vector_field
-from gfbjax.plain import plain_bearing_steady
+from gfbjax.analyses.plain import plain_bearing_steady
 
 jax.config.update("jax_enable_x64", True)
 

@@ -1,4 +1,4 @@
-"""Tests of gfbjax.optim: pattern search (paper Appendix A2, MATLAB GPS 2N) and the optax bounded minimiser."""
+"""Tests of gfbjax.design.optimizers: pattern search (paper Appendix A2, MATLAB GPS 2N) and the optax bounded minimiser."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import optax
 import pytest
 
-from gfbjax.optim import (
+from gfbjax.design.optimizers import (
     from_unconstrained,
     from_unconstrained_derivative,
     minimize_bounded,

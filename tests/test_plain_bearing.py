@@ -1,4 +1,4 @@
-"""Plain rigid 360-degree gas journal bearing (gfbjax.plain) against REFERENCE.md.
+"""Plain rigid 360-degree gas journal bearing (gfbjax.analyses.plain) against REFERENCE.md.
 
 References are independent of the finite-difference solver: the numbers printed in REFERENCE.md's table, the
 closed form of Al-Bender (``small_eccentricity_reference``, itself checked against the printed table here), the
@@ -24,7 +24,7 @@ import pytest
 
 import gfbjax
 from gfbjax import ParameterError
-from gfbjax.plain import plain_bearing_steady, small_eccentricity_reference, whirl_force
+from gfbjax.analyses.plain import plain_bearing_steady, small_eccentricity_reference, whirl_force
 
 jax.config.update("jax_enable_x64", True)
 
@@ -110,7 +110,7 @@ def test_mesh_convergence_second_order(Lambda):
 
 def test_lambda_is_traced_no_recompile(monkeypatch):
     """A loop over Lambda (and x, y, kappa) reuses the compiled solver; jax.vmap batches it."""
-    import gfbjax.plain as plain
+    import gfbjax.analyses.plain as plain
 
     calls = []
     orig = plain.plain_bearing_rates

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from gfbjax.signals import (
+from gfbjax.analyses.signals import (
     classify_poincare,
     lyapunov_rosenstein,
     poincare_section,

@@ -1,4 +1,4 @@
-"""Static equilibria of the GFB-rotor system (gfbjax.static): force balance, foil deflection, contact outcome.
+"""Static equilibria of the GFB-rotor system (gfbjax.analyses.static): force balance, foil deflection, contact outcome.
 
 The checks recompute the gas force and the strip mean pressures from the *returned pressure field* with NumPy
 quadrature written here (trapezoid rule in theta over the Nx + 1 nodes and in z over the Nz + 1 nodes), not with
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import gfbjax
-from gfbjax.static import solve_equilibrium
+from gfbjax.analyses.static import solve_equilibrium
 
 jax.config.update("jax_enable_x64", True)
 

@@ -10,8 +10,8 @@ import pytest
 import gfbjax
 from gfbjax.model import forced_vector_field, layout, runup_vector_field, vector_field
 from gfbjax.params import ParameterError
-from gfbjax.signals import classify_response, spectrum
-from gfbjax.transient import (
+from gfbjax.analyses.signals import classify_response, spectrum
+from gfbjax.analyses.transient import (
     TransientResult,
     TransientSettings,
     as_traced,
@@ -38,7 +38,7 @@ def g0_params():
 
 @pytest.fixture(scope="module")
 def equilibrium(g0_params):
-    from gfbjax.static import solve_equilibrium
+    from gfbjax.analyses.static import solve_equilibrium
 
     res = solve_equilibrium(g0_params, OMEGA)
     assert res.converged and res.stable

@@ -1,6 +1,6 @@
 """The ``gfbjax`` command line (also ``python -m gfbjax``).
 
-Subcommands live in :mod:`gfbjax.commands`, one module each with ``register(subparsers)``; they are discovered
+Subcommands live in :mod:`gfbjax.cli.commands`, one module each with ``register(subparsers)``; they are discovered
 automatically.  Code elsewhere can add one with :func:`register_command` before calling :func:`main`.
 
 Exit status: what the command returns (0 success); 2 for invalid input (a one-line message naming the option or
@@ -21,7 +21,7 @@ _EXTRA: list[Callable[[Any], Any]] = []
 
 
 def register_command(register: Callable[[Any], Any]) -> Callable[[Any], Any]:
-    """Add a subcommand defined outside :mod:`gfbjax.commands`; ``register(subparsers)`` adds its parser and sets
+    """Add a subcommand defined outside :mod:`gfbjax.cli.commands`; ``register(subparsers)`` adds its parser and sets
     ``func=run`` with ``run(args) -> int``.  Usable as a decorator."""
     if register not in _EXTRA:
         _EXTRA.append(register)
@@ -37,8 +37,8 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
     """The parser with every subcommand, and one warning line per command module that failed to import."""
-    from . import __version__
-    from .commands import discover
+    from gfbjax import __version__
+    from gfbjax.cli.commands import discover
 
     parser = _Parser(
         prog=PROG,
@@ -55,14 +55,14 @@ def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
         mod.register(sub)
     for reg in _EXTRA:
         reg(sub)
-    warnings = [f"{PROG}: warning: command module gfbjax.commands.{name} failed to import "
+    warnings = [f"{PROG}: warning: command module gfbjax.cli.commands.{name} failed to import "
                 f"({type(exc).__name__}: {exc})" for name, exc in failed]
     return parser, warnings
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
-    from .params import ParameterError
+    from gfbjax.params import ParameterError
 
     argv = list(sys.argv[1:] if argv is None else argv)
     parser, warnings = build_parser()

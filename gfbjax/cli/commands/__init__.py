@@ -7,7 +7,7 @@ Each public module of this package (a name without a leading underscore) is one 
 which adds its parser with ``subparsers.add_parser(NAME, ...)`` and sets ``parser.set_defaults(func=run)``, where
 ``run(args) -> int`` returns the exit status.  Modules are found automatically (:func:`discover`), so adding a
 command means adding one file here; nothing else needs editing.  Options shared by all commands that build a
-system (``--system``, ``--set``, ``--nx``, ``--nz``, ``--out``) come from :mod:`gfbjax.commands._common`.
+system (``--system``, ``--set``, ``--nx``, ``--nz``, ``--out``) come from :mod:`gfbjax.cli.commands._common`.
 
 Commands from other packages can be added with :func:`gfbjax.cli.register_command`.
 """

@@ -13,7 +13,7 @@ import math  # noqa: E402
 import time  # noqa: E402
 from typing import Any  # noqa: E402
 
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
+from gfbjax.cli.commands._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
 
 NAME = "runup"
 
@@ -23,7 +23,7 @@ Run-up (end > start) or coast-down (end < start) of the unbalanced rotor at cons
 start speed, after --settle-revs revolutions at the start speed.  A progress bar advances per chunk; a rub (the
 film thickness reaching --h-rub) ends the run and keeps what was computed.
 
-Writes to --out: runup.npz (time history: tau, speed, rotor states, h_min; gfbjax.transient.TransientResult.load),
+Writes to --out: runup.npz (time history: tau, speed, rotor states, h_min; gfbjax.analyses.transient.TransientResult.load),
 runup.json (summary, sub-synchronous speed ranges, solver statistics), runup_response.png (journal vertical and
 horizontal displacement against speed, paper Fig. 7a/b) and runup_stft.png (STFT against speed, Fig. 7c).
 Exit status: 0 completed, 1 rub or solver failure, 2 invalid input.
@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
 
     import gfbjax
 
-    from ..signals import runup_stft, subsynchronous
-    from ..transient import TransientSettings, default_initial_state, run_up, simulate
+    from gfbjax.analyses.signals import runup_stft, subsynchronous
+    from gfbjax.analyses.transient import TransientSettings, default_initial_state, run_up, simulate
 
     t_start = time.perf_counter()
     spec = spec_from_args(args)
@@ -154,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from ..plot_transient import plot_runup, plot_spectrogram
+        from gfbjax.plot.transient import plot_runup, plot_spectrogram
 
         fig = plot_runup(res, overlay, c_um=c_um,
                          title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)", path=out / "runup_response.png")
@@ -184,8 +184,8 @@ def _cycle_overlay(path: str | None) -> dict | None:
     """Max/min of the journal displacement of a saved cycle branch, in the form ``plot_runup`` takes."""
     if path is None:
         return None
-    from ..cont import Branch
-    from ..params import ParameterError
+    from gfbjax.cont import Branch
+    from gfbjax.params import ParameterError
 
     try:
         b = Branch.load(path)

@@ -1,15 +1,15 @@
 r"""Foil optimisation at one speed and the optimised continuation in speed (paper Sect. 3.3 steps a-f, App. A2).
 
-Objectives (:mod:`gfbjax.design`): ``"W_cb"`` (OBJ1, maximise the gas-film dissipation per cycle; the paper's
+Objectives (:mod:`gfbjax.design.evaluate`): ``"W_cb"`` (OBJ1, maximise the gas-film dissipation per cycle; the paper's
 pattern search minimises ``1/W_cb``) and ``"max_mu"`` (OBJ2, minimise the largest non-trivial Floquet multiplier
 modulus).  Methods:
 
-* ``"pattern"`` — the paper's generalized pattern search (:func:`gfbjax.optim.pattern_search`, Appendix A2: mesh
+* ``"pattern"`` — the paper's generalized pattern search (:func:`gfbjax.design.optimizers.pattern_search`, Appendix A2: mesh
   1, x2 after a successful poll, x0.5 after a failed one, bounds of :data:`FOIL_BOUNDS`, mesh tolerance 1e-6, at
   most 300 iterations) on the raw variables (alpha_f, eta);
 * ``"gradient"`` — projected quasi-Newton in log-variables with optax's L-BFGS direction
-  (:func:`gfbjax.optim.minimize_log_box`) and the implicit gradients of :class:`~gfbjax.design.FoilDesign`;
-* ``"adam"`` — optax Adam on sigmoid-bounded log-variables (:func:`gfbjax.optim.minimize_bounded`): slower to
+  (:func:`gfbjax.design.optimizers.minimize_log_box`) and the implicit gradients of :class:`~gfbjax.design.evaluate.FoilDesign`;
+* ``"adam"`` — optax Adam on sigmoid-bounded log-variables (:func:`gfbjax.design.optimizers.minimize_bounded`): slower to
   converge, above all when the optimum is on a bound (kept for comparison).
 
 Every cycle is warm-started from the previous one (step c).  Both methods count limit-cycle solves.
@@ -25,9 +25,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .design import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
-from .optim import minimize_bounded, minimize_log_box, pattern_search
-from .params import ParameterError, Params
+from gfbjax.design.evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
+from gfbjax.design.optimizers import minimize_bounded, minimize_log_box, pattern_search
+from gfbjax.params import ParameterError, Params
 
 __all__ = ["OBJECTIVES", "METHODS", "SpeedOptimum", "Schedule", "optimize_at_speed", "optimized_continuation"]
 
@@ -73,7 +73,7 @@ def optimize_at_speed(design: FoilDesign, objective: str = "W_cb", method: str =
                       **options: Any) -> SpeedOptimum:
     """Optimise (alpha_f, eta) at the design's current speed from ``x0`` (default: the design's params).
 
-    ``options`` go to :func:`gfbjax.optim.pattern_search` or :func:`gfbjax.optim.minimize_bounded`."""
+    ``options`` go to :func:`gfbjax.design.optimizers.pattern_search` or :func:`gfbjax.design.optimizers.minimize_bounded`."""
     _check(objective, method)
     p = design.params
     x0 = np.array(x0 if x0 is not None else (float(p.alpha_f), float(p.eta)), float)
@@ -230,6 +230,6 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
 
 
 def _journal_columns(params: Params) -> list[int]:
-    from .cycles import rotor_components
+    from gfbjax.analyses.cycles import rotor_components
 
     return rotor_components(params)[:2]

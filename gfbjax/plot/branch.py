@@ -2,7 +2,7 @@
 min of the journal displacements against speed, stable solid / unstable dashed, special points marked), the
 Floquet multipliers in the complex plane with the unit circle, and the equilibrium branch of the balanced rotor
 (journal position and critical eigenvalue real part against speed), the energy flow of cycle branches and the
-optimised foil schedules of :func:`gfbjax.foil_opt.optimized_continuation`."""
+optimised foil schedules of :func:`gfbjax.design.schedule.optimized_continuation`."""
 
 from __future__ import annotations
 
@@ -199,10 +199,10 @@ def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None =
     """Energy flow along cycle branches (paper Fig. 12): W_fu, W_cf and W_cb [p0 R L c] against Omega_bar, one
     panel per design; stable solid, unstable dashed; NS points and the sign changes of W_cb marked.
 
-    ``branches``: (label, branch, :class:`gfbjax.energy.CycleEnergy` of its points) per design."""
+    ``branches``: (label, branch, :class:`gfbjax.analyses.energy.CycleEnergy` of its points) per design."""
     import matplotlib.pyplot as plt
 
-    from .energy import sign_changes
+    from gfbjax.analyses.energy import sign_changes
 
     k = len(branches)
     ncol = 2 if k > 1 else 1
@@ -242,16 +242,16 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
     """Optimised foil schedules along the speed (paper Figs. 16-19), one line (colour) per schedule:
 
     a) journal orbit extent, the max and min over the cycle of y_j (solid) and x_j (dotted) [c];
-    b) the optimum alpha_f and c) eta (log scale, the bounds of :data:`gfbjax.design.FOIL_BOUNDS` dotted);
+    b) the optimum alpha_f and c) eta (log scale, the bounds of :data:`gfbjax.design.evaluate.FOIL_BOUNDS` dotted);
     d) the largest non-trivial Floquet multiplier modulus with the stability limit |mu| = 1;
     e) W_cb [p0 R L c], the net gas-film dissipation per cycle;
     f) the ``n_show`` largest multipliers of every speed in the complex plane with the unit circle.
 
     Unstable optimised cycles (where a march ends) are marked with a cross.  ``schedules``: (label,
-    :class:`gfbjax.foil_opt.Schedule`) pairs."""
+    :class:`gfbjax.design.schedule.Schedule`) pairs."""
     import matplotlib.pyplot as plt
 
-    from .design import FOIL_BOUNDS
+    from gfbjax.design.evaluate import FOIL_BOUNDS
 
     fig, axes = plt.subplots(3, 2, figsize=(12, 11.5))
     ax_j, ax_a, ax_e, ax_mu, ax_w, ax_c = axes.ravel()

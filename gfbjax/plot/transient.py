@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .signals import Spectrogram, poincare_section, spectrum
+from gfbjax.analyses.signals import Spectrogram, poincare_section, spectrum
 
 __all__ = ["plot_runup", "plot_spectrogram", "plot_orbit_poincare_fft"]
 
@@ -25,7 +25,7 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
     """Journal vertical (a) and horizontal (b) displacement against speed during a run-up (paper Fig. 7a/7b).
 
     Args:
-        result: a run-up :class:`gfbjax.transient.TransientResult`.
+        result: a run-up :class:`gfbjax.analyses.transient.TransientResult`.
         cycles: optional max/min of limit cycles from continuation: a mapping with ``speed`` and any of
             ``y_max``, ``y_min``, ``x_max``, ``x_min`` (over c), optionally ``stable`` (bool per speed; unstable
             cycles are drawn dashed).
@@ -59,7 +59,7 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
 def plot_spectrogram(sg: Spectrogram, *, max_order: float | None = None, db_range: float = 60.0,
                      subsync: list | None = None, title: str | None = None, path: str | Path | None = None):
     """STFT amplitude against speed and order (multiples of the running frequency; paper Fig. 7c) with the 1X
-    line; ``subsync`` ranges (from :func:`gfbjax.signals.subsynchronous`) are marked."""
+    line; ``subsync`` ranges (from :func:`gfbjax.analyses.signals.subsynchronous`) are marked."""
     import matplotlib.pyplot as plt
 
     o = sg.order if max_order is None else sg.order[sg.order <= max_order]

@@ -439,7 +439,7 @@ def classify_poincare(points: np.ndarray, *, scale: float | None = None, period_
 
 def classify_response(result: Any, last: int = 100, coords: Sequence[int] = (0, 1, 4, 5), **kwargs: Any
                       ) -> Classification:
-    """Classify the last ``last`` revolutions of a constant-speed :class:`gfbjax.transient.TransientResult` from
+    """Classify the last ``last`` revolutions of a constant-speed :class:`gfbjax.analyses.transient.TransientResult` from
     its Poincare points in the rotor coordinates ``coords`` (default journal position and velocity; the rigid
     rotor's velocities are columns 2, 3).  ``scale`` is the peak-to-peak of the journal orbit over those
     revolutions (the paper: the last 100 of 500)."""

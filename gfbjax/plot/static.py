@@ -176,7 +176,7 @@ def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None 
 
     Args:
         curves: ``{alpha_f: {omega: [StaticResult, ...]}}`` (results in order of increasing load, as returned by
-            :func:`gfbjax.static.load_displacement`); also ``{omega: [...]}`` or a list of results.
+            :func:`gfbjax.analyses.static.load_displacement`); also ``{omega: [...]}`` or a list of results.
         spec: the :class:`gfbjax.SystemSpec` (optional): adds a micrometre axis (right) and a newton axis (top).
         c_um: radial clearance in micrometres, for the right axis when no ``spec`` is given.
         path: file to save to (optional).
@@ -399,7 +399,7 @@ def plot_static_summary(result: Any, spec: Any = None, *, path: str | os.PathLik
     unit dimensionless time tau = t / t*; with ``spec`` the zoom also has a frequency axis in Hz.
 
     Args:
-        result: a :class:`gfbjax.static.StaticResult`.
+        result: a :class:`gfbjax.analyses.static.StaticResult`.
         spec: its :class:`gfbjax.SystemSpec` (optional; adds micrometres, kPa, rpm and Hz).
         path: file to save to (optional).
         n_modes: most eigenvalues in the zoom window.

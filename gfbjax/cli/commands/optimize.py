@@ -8,12 +8,12 @@ import argparse
 import time
 from typing import Any
 
-from ..params import ParameterError
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
+from gfbjax.params import ParameterError
+from gfbjax.cli.commands._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
 
 NAME = "optimize"
 
-# gfbjax.foil_opt.OBJECTIVES and METHODS, spelled out so that building the parser does not import the optimisers
+# gfbjax.design.schedule.OBJECTIVES and METHODS, spelled out so that building the parser does not import the optimisers
 # (the tests check that the two agree)
 OBJECTIVES = ("W_cb", "max_mu")
 METHODS = ("gradient", "adam", "pattern")
@@ -95,7 +95,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 def check_options(args: argparse.Namespace, spec: Any) -> tuple[float, float]:
     """Check every option before any computation (ParameterError naming the option); returns the start foil."""
-    from ..design import FOIL_BOUNDS
+    from gfbjax.design.evaluate import FOIL_BOUNDS
 
     check_option("--m", args.m, 2, 7, what="collocation points per interval")
     check_option("--N", args.N, 2, 10**5, what="mesh intervals")
@@ -175,8 +175,8 @@ def _finish(out: Any, name: str, data: dict[str, Any], figure: Any, t0: float) -
 def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
     import numpy as np
 
-    from ..design import FoilDesign
-    from ..foil_opt import optimize_at_speed
+    from gfbjax.design.evaluate import FoilDesign
+    from gfbjax.design.schedule import optimize_at_speed
 
     design = FoilDesign(params, args.speed, m=args.m, N=args.N)
     opt = optimize_at_speed(design, args.objective, args.method, x0, progress=not args.quiet, **options)
@@ -205,7 +205,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
 
 
 def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
-    from ..foil_opt import optimized_continuation
+    from gfbjax.design.schedule import optimized_continuation
 
     step = DEFAULT_STEP if args.step is None else args.step
     sched = optimized_continuation(params, args.start, args.end, step, objective=args.objective,
@@ -225,7 +225,7 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
     ]), flush=True)
     fig = None
     if not args.no_figures and sched.omega:
-        from ..plot_branch import plot_schedule
+        from gfbjax.plot.branch import plot_schedule
 
         fig = plot_schedule([(f"{args.objective}, {args.method}", sched)],
                             title=f"Optimised foil along the speed, system '{args.system}' (Nx={spec.Nx}, "
@@ -241,7 +241,7 @@ def _plot_optimum(hist: Any, x0: tuple[float, float], opt: Any, args: argparse.N
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from ..design import FOIL_BOUNDS
+    from gfbjax.design.evaluate import FOIL_BOUNDS
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
     k = np.arange(1, len(hist) + 1)
