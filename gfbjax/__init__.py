@@ -30,7 +30,7 @@ import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
-from gfbjax.params import (  # noqa: E402
+from .params import (  # noqa: E402
     VARIATIONS,
     ParameterError,
     Params,

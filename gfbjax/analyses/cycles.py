@@ -23,11 +23,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax import cont
-from gfbjax.model import core_rates, layout, vector_field
-from gfbjax.model.pattern import jacobian_sparsity
-from gfbjax.params import ParameterError, Params
-from gfbjax.analyses.static import StaticResult, solve_equilibrium
+from .. import cont
+from ..model import core_rates, layout, vector_field
+from ..model.pattern import jacobian_sparsity
+from ..params import ParameterError, Params
+from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
            "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "rotor_components",

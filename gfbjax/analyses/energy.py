@@ -31,12 +31,12 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from gfbjax.cont import collocation as col
-from gfbjax.model import layout
-from gfbjax.model.foil import foil_rates
-from gfbjax.model.reynolds import bearing_force, gauge, mean_gauge_pressure
-from gfbjax.model.rotor import unbalance_force
-from gfbjax.params import Params
+from ..cont import collocation as col
+from ..model import layout
+from ..model.foil import foil_rates
+from ..model.reynolds import bearing_force, gauge, mean_gauge_pressure
+from ..model.rotor import unbalance_force
+from ..params import Params
 
 __all__ = ["CycleEnergy", "power", "cycle_energy", "orbit_energy", "branch_energy", "sign_changes"]
 

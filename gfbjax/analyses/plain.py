@@ -39,8 +39,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from gfbjax.model import Grid, bearing_force, plain_bearing_rates
-from gfbjax.params import ParameterError
+from ..model import Grid, bearing_force, plain_bearing_rates
+from ..params import ParameterError
 
 __all__ = [
     "PlainBearingResult",

@@ -24,8 +24,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from gfbjax.model import balanced_vector_field, film, layout
-from gfbjax.params import ParameterError, Params, SystemSpec
+from ..model import balanced_vector_field, film, layout
+from ..params import ParameterError, Params, SystemSpec
 
 __all__ = ["StaticResult", "NewtonResult", "newton_solve", "solve_equilibrium", "load_displacement",
            "with_load"]
@@ -288,7 +288,7 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         if t >= 1.0:
             return _build_result(s, omega, w, params, "converged", "converged from the given guess", 1.0,
                                  res_norm, iters)
-    from gfbjax.model import initial_state
+    from ..model import initial_state
 
     s0 = initial_state(with_load(params, w, 0.0))
     s, frac, res_norm, it = _ramp(s0, lambda t: with_load(params, w, t), omega_a, xtol, min_fraction_step,

@@ -52,9 +52,9 @@ import lineax as lx
 import optimistix as optx
 from jax import Array
 
-from gfbjax.cont.sparsity import color_pattern
-from gfbjax.model import film, layout, runup_vector_field
-from gfbjax.params import ParameterError, Params
+from ..cont.sparsity import color_pattern
+from ..model import film, layout, runup_vector_field
+from ..params import ParameterError, Params
 
 __all__ = [
     "SOLVERS",
@@ -284,7 +284,7 @@ def outputs_of(s: Array, params: Params) -> tuple[Array, Array]:
 def default_initial_state(params: Params, omega: float) -> tuple[np.ndarray, str]:
     """The static equilibrium of the balanced system at ``omega`` (:func:`gfbjax.analyses.static.solve_equilibrium`), as
     the start of a run, and a note on it."""
-    from gfbjax.analyses.static import solve_equilibrium
+    from .static import solve_equilibrium
 
     res = solve_equilibrium(as_traced(params), float(omega))
     note = f"started from the static equilibrium at Omega_bar = {omega:g} ({res.outcome})"
@@ -329,8 +329,8 @@ class JacobianColoring:
 
 @functools.lru_cache(maxsize=16)
 def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float) -> JacobianColoring:
-    from gfbjax.model.pattern import jacobian_sparsity
-    from gfbjax.params import reference_system
+    from ..model.pattern import jacobian_sparsity
+    from ..params import reference_system
 
     params = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width).nondim()
     pat = jacobian_sparsity(params, oscillator=False)

@@ -37,8 +37,8 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
     """The parser with every subcommand, and one warning line per command module that failed to import."""
-    from gfbjax import __version__
-    from gfbjax.cli.commands import discover
+    from .. import __version__
+    from .commands import discover
 
     parser = _Parser(
         prog=PROG,
@@ -62,7 +62,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
-    from gfbjax.params import ParameterError
+    from ..params import ParameterError
 
     argv = list(sys.argv[1:] if argv is None else argv)
     parser, warnings = build_parser()

@@ -25,18 +25,18 @@ if "xla_cpu_enable_concurrency_optimized_scheduler" not in _os.environ.get("XLA_
                                 + " --xla_cpu_enable_concurrency_optimized_scheduler=false").strip()
 _os.environ.setdefault("NPROC", str(max(8, (_os.cpu_count() or 1) + 4)))
 
-from gfbjax.cont.branch import Branch, PointRecord
-from gfbjax.cont.collocation import (Constraint, NewtonResult, Orbit, Scheme, dense_newton_step, natural_constraint,
+from .branch import Branch, PointRecord
+from .collocation import (Constraint, NewtonResult, Orbit, Scheme, dense_newton_step, natural_constraint,
                           newton, newton_step, orbit_from_function, orbit_from_samples, palc_constraint,
                           transfer_matrices, uniform_mesh)
-from gfbjax.cont.equilibria import EquilibriumSettings, HopfPoint, continue_equilibria, hopf_point
-from gfbjax.cont.floquet import (PeriodicQRResult, multipliers_periodic, multipliers_product, nontrivial,
+from .equilibria import EquilibriumSettings, HopfPoint, continue_equilibria, hopf_point
+from .floquet import (PeriodicQRResult, multipliers_periodic, multipliers_product, nontrivial,
                       trivial_error)
-from gfbjax.cont.palc import (CycleSettings, CycleStart, DenseBackend, analyse, continue_cycles, make_backend,
+from .palc import (CycleSettings, CycleStart, DenseBackend, analyse, continue_cycles, make_backend,
                    start_from_branch, start_from_function, start_from_hopf, start_from_pd, start_from_samples)
-from gfbjax.cont.sparse_colloc import SparseCollocation
-from gfbjax.cont.sparsity import Coloring, color_pattern, jacobian_values
-from gfbjax.cont.problem import CycleProblem, EquilibriumProblem
+from .sparse_colloc import SparseCollocation
+from .sparsity import Coloring, color_pattern, jacobian_values
+from .problem import CycleProblem, EquilibriumProblem
 
 __all__ = [
     "Branch", "PointRecord", "Constraint", "NewtonResult", "Orbit", "Scheme", "dense_newton_step",

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.cont import collocation as col
+from . import collocation as col
 
 __all__ = ["BatchNewtonResult", "batched_newton"]
 

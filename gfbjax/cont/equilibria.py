@@ -29,9 +29,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.cont.branch import Branch, PointRecord
-from gfbjax.cont.events import locate
-from gfbjax.cont.problem import check_step_settings, EquilibriumProblem, check_range
+from .branch import Branch, PointRecord
+from .events import locate
+from .problem import check_step_settings, EquilibriumProblem, check_range
 
 IMAG_TOL = 1e-8
 

@@ -32,8 +32,8 @@ from typing import Any, Callable
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.floquet import nontrivial
+from . import collocation as col
+from .floquet import nontrivial
 
 IMAG_TOL = 1e-7
 NS_MIN_ANGLE = 1e-2  # rad

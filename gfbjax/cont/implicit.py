@@ -41,9 +41,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.floquet import trivial_index
-from gfbjax.cont.problem import CycleProblem
+from . import collocation as col
+from .floquet import trivial_index
+from .problem import CycleProblem
 
 __all__ = ["orbit_sensitivities", "functional_derivatives", "multiplier_derivatives", "leading_nontrivial",
            "adjoint_gradient", "MultiplierModulus"]

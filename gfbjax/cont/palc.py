@@ -28,11 +28,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.branch import Branch, PointRecord
-from gfbjax.cont.events import cycle_test_functions, detect, double_orbit_pd, locate, ns_angle
-from gfbjax.cont.floquet import multipliers_periodic, multipliers_product, nontrivial, trivial_error
-from gfbjax.cont.problem import check_step_settings, CycleProblem, check_range
+from . import collocation as col
+from .branch import Branch, PointRecord
+from .events import cycle_test_functions, detect, double_orbit_pd, locate, ns_angle
+from .floquet import multipliers_periodic, multipliers_product, nontrivial, trivial_error
+from .problem import check_step_settings, CycleProblem, check_range
 
 
 @dataclass(frozen=True)
@@ -209,7 +209,7 @@ def make_backend(problem: CycleProblem, scheme: col.Scheme, settings: "CycleSett
     if choice == "sparse":
         if problem.jac_sparsity is None:
             raise ValueError("linear_solver='sparse' needs CycleProblem.jac_sparsity (the pattern of df/dx)")
-        from gfbjax.cont.sparse_colloc import SparseCollocation
+        from .sparse_colloc import SparseCollocation
 
         return SparseCollocation(problem.f, problem.args, problem.n, problem.jac_sparsity, scheme,
                                  n_multipliers=s.n_multipliers)

@@ -39,8 +39,8 @@ import numpy as np
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.sparsity import Coloring, color_pattern, jacobian_values
+from . import collocation as col
+from .sparsity import Coloring, color_pattern, jacobian_values
 
 
 class SolveError(RuntimeError):

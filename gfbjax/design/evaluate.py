@@ -24,14 +24,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax import cont
-from gfbjax.cont import collocation as col
-from gfbjax.cont.floquet import nontrivial
-from gfbjax.cont.implicit import (MultiplierModulus, adjoint_gradient, functional_derivatives,
+from .. import cont
+from ..cont import collocation as col
+from ..cont.floquet import nontrivial
+from ..cont.implicit import (MultiplierModulus, adjoint_gradient, functional_derivatives,
                             multiplier_derivatives, orbit_sensitivities)
-from gfbjax.analyses.cycles import gfb_cycle_problem, linear_response_start
-from gfbjax.analyses.energy import CycleEnergy, orbit_energy
-from gfbjax.params import ParameterError, Params
+from ..analyses.cycles import gfb_cycle_problem, linear_response_start
+from ..analyses.energy import CycleEnergy, orbit_energy
+from ..params import ParameterError, Params
 
 __all__ = ["FOIL_BOUNDS", "DESIGN_VARIABLES", "CycleEvaluation", "CycleNotConverged", "FoilDesign", "W_cb_of"]
 

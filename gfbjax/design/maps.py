@@ -21,12 +21,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.batch import batched_newton
-from gfbjax.analyses.cycles import _f_cycles
-from gfbjax.design.evaluate import FoilDesign, check_foil
-from gfbjax.analyses.energy import cycle_energy, orbit_energy
-from gfbjax.params import ParameterError, Params
+from ..cont import collocation as col
+from ..cont.batch import batched_newton
+from ..analyses.cycles import _f_cycles
+from .evaluate import FoilDesign, check_foil
+from ..analyses.energy import cycle_energy, orbit_energy
+from ..params import ParameterError, Params
 
 __all__ = ["EnergyMap", "energy_map", "energy_map_loop"]
 

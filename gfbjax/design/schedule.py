@@ -25,9 +25,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from gfbjax.design.evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
-from gfbjax.design.optimizers import minimize_bounded, minimize_log_box, pattern_search
-from gfbjax.params import ParameterError, Params
+from .evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
+from .optimizers import minimize_bounded, minimize_log_box, pattern_search
+from ..params import ParameterError, Params
 
 __all__ = ["OBJECTIVES", "METHODS", "SpeedOptimum", "Schedule", "optimize_at_speed", "optimized_continuation"]
 
@@ -230,6 +230,6 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
 
 
 def _journal_columns(params: Params) -> list[int]:
-    from gfbjax.analyses.cycles import rotor_components
+    from ..analyses.cycles import rotor_components
 
     return rotor_components(params)[:2]

@@ -1,8 +1,8 @@
 """The GFB-rotor model: finite-difference Reynolds equation, bump-foil strips, Jeffcott/rigid rotor."""
 
-from gfbjax.model.grid import Grid, StateLayout
-from gfbjax.model.reynolds import bearing_force, film_thickness, gauge, mean_gauge_pressure, pressure_rates
-from gfbjax.model.system import (
+from .grid import Grid, StateLayout
+from .reynolds import bearing_force, film_thickness, gauge, mean_gauge_pressure, pressure_rates
+from .system import (
     balanced_vector_field,
     core_rates,
     film,

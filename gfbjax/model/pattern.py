@@ -8,8 +8,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from gfbjax.params import Params, reference_system
-from gfbjax.model.system import layout, vector_field
+from ..params import Params, reference_system
+from .system import layout, vector_field
 
 
 @functools.lru_cache(maxsize=16)

@@ -12,7 +12,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from gfbjax.model.grid import Grid
+from .grid import Grid
 
 __all__ = ["gauge", "film_thickness", "pressure_rates", "bearing_force", "mean_gauge_pressure"]
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jax import Array
 
-from gfbjax.params import Params
-from gfbjax.model.foil import foil_rates
-from gfbjax.model.grid import Grid, StateLayout
-from gfbjax.model.reynolds import bearing_force, film_thickness, gauge, mean_gauge_pressure, pressure_rates
-from gfbjax.model.rotor import N_ROTOR, oscillator_rates, rotor_rates, unbalance_force, unbalance_force_runup
+from ..params import Params
+from .foil import foil_rates
+from .grid import Grid, StateLayout
+from .reynolds import bearing_force, film_thickness, gauge, mean_gauge_pressure, pressure_rates
+from .rotor import N_ROTOR, oscillator_rates, rotor_rates, unbalance_force, unbalance_force_runup
 
 __all__ = [
     "grid_of",

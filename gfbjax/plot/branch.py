@@ -202,7 +202,7 @@ def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None =
     ``branches``: (label, branch, :class:`gfbjax.analyses.energy.CycleEnergy` of its points) per design."""
     import matplotlib.pyplot as plt
 
-    from gfbjax.analyses.energy import sign_changes
+    from ..analyses.energy import sign_changes
 
     k = len(branches)
     ncol = 2 if k > 1 else 1
@@ -251,7 +251,7 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
     :class:`gfbjax.design.schedule.Schedule`) pairs."""
     import matplotlib.pyplot as plt
 
-    from gfbjax.design.evaluate import FOIL_BOUNDS
+    from ..design.evaluate import FOIL_BOUNDS
 
     fig, axes = plt.subplots(3, 2, figsize=(12, 11.5))
     ax_j, ax_a, ax_e, ax_mu, ax_w, ax_c = axes.ravel()

@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from gfbjax.analyses.signals import Spectrogram, poincare_section, spectrum
+from ..analyses.signals import Spectrogram, poincare_section, spectrum
 
 __all__ = ["plot_runup", "plot_spectrogram", "plot_orbit_poincare_fft"]
 

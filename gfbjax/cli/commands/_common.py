@@ -2,7 +2,7 @@
 
 Use in a command module::
 
-    from gfbjax.cli.commands._common import add_system_options, spec_from_args, output_dir, traced_params
+    from ._common import add_system_options, spec_from_args, output_dir, traced_params
 
     def register(subparsers):
         p = subparsers.add_parser("mycmd", help="...", description="...")
@@ -33,7 +33,7 @@ import typing
 from pathlib import Path
 from typing import Any, Iterable
 
-from gfbjax.params import VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
+from ...params import VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
 
 __all__ = [
     "SYSTEM_NAMES",

@@ -9,8 +9,8 @@ import math
 import time
 from typing import Any
 
-from gfbjax.params import ParameterError
-from gfbjax.cli.commands._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
+from ...params import ParameterError
+from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
                       traced_params, write_summary)
 
 NAME = "cycles"
@@ -74,7 +74,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _settings(args: argparse.Namespace):
-    from gfbjax.analyses.cycles import default_cycle_settings
+    from ...analyses.cycles import default_cycle_settings
 
     check_continuation_options(args)
     check_option("--m", args.m, 2, 7, what="collocation points per interval")
@@ -104,7 +104,7 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
     """The special points of a cycle branch for the JSON summary and the table."""
     import numpy as np
 
-    from gfbjax.cont import nontrivial
+    from ...cont import nontrivial
 
     out = []
     for s in branch.special:
@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
 
     import gfbjax
 
-    from gfbjax.analyses.cycles import continue_gfb_cycles, rotor_components
+    from ...analyses.cycles import continue_gfb_cycles, rotor_components
 
     t0 = time.perf_counter()
     spec = spec_from_args(args)
@@ -225,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.branch import plot_bifurcation, plot_multipliers
+        from ...plot.branch import plot_bifurcation, plot_multipliers
 
         fig = plot_bifurcation(branch, c_um=c_um, title=f"Limit cycles, system '{args.system}' "
                                                         f"(Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})",

@@ -11,8 +11,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from gfbjax.cli.commands import cycles as _cycles
-from gfbjax.cli.commands._common import output_dir, spec_from_args, traced_params, write_summary
+from . import cycles as _cycles
+from ._common import output_dir, spec_from_args, traced_params, write_summary
 
 NAME = "energy"
 
@@ -79,8 +79,8 @@ def run(args: argparse.Namespace) -> int:
 
     import gfbjax
 
-    from gfbjax.analyses.cycles import continue_gfb_cycles
-    from gfbjax.analyses.energy import CycleEnergy, branch_energy, sign_changes
+    from ...analyses.cycles import continue_gfb_cycles
+    from ...analyses.energy import CycleEnergy, branch_energy, sign_changes
 
     t0 = time.perf_counter()
     spec = spec_from_args(args)
@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.branch import plot_energy
+        from ...plot.branch import plot_energy
 
         fig = plot_energy([(f"system '{args.system}' (Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})",
                             branch, E)], path=out / "energy.png")

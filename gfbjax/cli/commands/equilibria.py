@@ -8,8 +8,8 @@ import math
 import time
 from typing import Any
 
-from gfbjax.params import ParameterError
-from gfbjax.cli.commands._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
+from ...params import ParameterError
+from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
                       traced_params, write_summary)
 
 NAME = "equilibria"
@@ -64,7 +64,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _settings(args: argparse.Namespace):
-    from gfbjax.cont import EquilibriumSettings
+    from ...cont import EquilibriumSettings
 
     check_continuation_options(args)
     check_option("--hopf-cycles", args.hopf_cycles, 0, 10**5, what="points")
@@ -104,9 +104,9 @@ def run(args: argparse.Namespace) -> int:
 
     import gfbjax
 
-    from gfbjax.analyses.cycles import continue_gfb_equilibria
+    from ...analyses.cycles import continue_gfb_equilibria
 
-    from gfbjax.cli.commands.cycles import reached_end
+    from .cycles import reached_end
 
     t0 = time.perf_counter()
     spec = spec_from_args(args)
@@ -161,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.branch import plot_equilibria
+        from ...plot.branch import plot_equilibria
 
         fig = plot_equilibria(branch, title=f"Equilibria of the balanced rotor, system '{args.system}'",
                               path=out / "equilibria.png")
@@ -189,7 +189,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     """Self-excited cycles from the first Hopf point: branch file, figure and a summary (criticality, amplitude)."""
     import numpy as np
 
-    from gfbjax.analyses.cycles import continue_gfb_hopf_cycles, default_cycle_settings, hopf_criticality
+    from ...analyses.cycles import continue_gfb_hopf_cycles, default_cycle_settings, hopf_criticality
 
     lo, hi = sorted((args.start, args.end))
     s = default_cycle_settings(ds=0.02, ds_max=2.0, dlam_max=0.005, max_points=args.hopf_cycles, lam_min=lo,
@@ -221,7 +221,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.branch import plot_bifurcation
+        from ...plot.branch import plot_bifurcation
 
         fig = plot_bifurcation(cyc, title=f"Self-excited cycles from the Hopf point, system '{args.system}'",
                                path=out / "hopf_cycles.png")

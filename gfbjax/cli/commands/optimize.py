@@ -8,8 +8,8 @@ import argparse
 import time
 from typing import Any
 
-from gfbjax.params import ParameterError
-from gfbjax.cli.commands._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
+from ...params import ParameterError
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
 
 NAME = "optimize"
 
@@ -95,7 +95,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 def check_options(args: argparse.Namespace, spec: Any) -> tuple[float, float]:
     """Check every option before any computation (ParameterError naming the option); returns the start foil."""
-    from gfbjax.design.evaluate import FOIL_BOUNDS
+    from ...design.evaluate import FOIL_BOUNDS
 
     check_option("--m", args.m, 2, 7, what="collocation points per interval")
     check_option("--N", args.N, 2, 10**5, what="mesh intervals")
@@ -175,8 +175,8 @@ def _finish(out: Any, name: str, data: dict[str, Any], figure: Any, t0: float) -
 def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
     import numpy as np
 
-    from gfbjax.design.evaluate import FoilDesign
-    from gfbjax.design.schedule import optimize_at_speed
+    from ...design.evaluate import FoilDesign
+    from ...design.schedule import optimize_at_speed
 
     design = FoilDesign(params, args.speed, m=args.m, N=args.N)
     opt = optimize_at_speed(design, args.objective, args.method, x0, progress=not args.quiet, **options)
@@ -205,7 +205,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
 
 
 def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
-    from gfbjax.design.schedule import optimized_continuation
+    from ...design.schedule import optimized_continuation
 
     step = DEFAULT_STEP if args.step is None else args.step
     sched = optimized_continuation(params, args.start, args.end, step, objective=args.objective,
@@ -225,7 +225,7 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
     ]), flush=True)
     fig = None
     if not args.no_figures and sched.omega:
-        from gfbjax.plot.branch import plot_schedule
+        from ...plot.branch import plot_schedule
 
         fig = plot_schedule([(f"{args.objective}, {args.method}", sched)],
                             title=f"Optimised foil along the speed, system '{args.system}' (Nx={spec.Nx}, "
@@ -241,7 +241,7 @@ def _plot_optimum(hist: Any, x0: tuple[float, float], opt: Any, args: argparse.N
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from gfbjax.design.evaluate import FOIL_BOUNDS
+    from ...design.evaluate import FOIL_BOUNDS
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
     k = np.arange(1, len(hist) + 1)

@@ -13,7 +13,7 @@ import math  # noqa: E402
 import time  # noqa: E402
 from typing import Any  # noqa: E402
 
-from gfbjax.cli.commands._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
+from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
 
 NAME = "runup"
 
@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
 
     import gfbjax
 
-    from gfbjax.analyses.signals import runup_stft, subsynchronous
-    from gfbjax.analyses.transient import TransientSettings, default_initial_state, run_up, simulate
+    from ...analyses.signals import runup_stft, subsynchronous
+    from ...analyses.transient import TransientSettings, default_initial_state, run_up, simulate
 
     t_start = time.perf_counter()
     spec = spec_from_args(args)
@@ -154,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.transient import plot_runup, plot_spectrogram
+        from ...plot.transient import plot_runup, plot_spectrogram
 
         fig = plot_runup(res, overlay, c_um=c_um,
                          title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)", path=out / "runup_response.png")
@@ -184,8 +184,8 @@ def _cycle_overlay(path: str | None) -> dict | None:
     """Max/min of the journal displacement of a saved cycle branch, in the form ``plot_runup`` takes."""
     if path is None:
         return None
-    from gfbjax.cont import Branch
-    from gfbjax.params import ParameterError
+    from ...cont import Branch
+    from ...params import ParameterError
 
     try:
         b = Branch.load(path)

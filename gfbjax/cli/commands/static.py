@@ -10,8 +10,8 @@ import sys
 import time
 from typing import Any
 
-from gfbjax.params import ParameterError, SystemSpec
-from gfbjax.cli.commands._common import (
+from ...params import ParameterError, SystemSpec
+from ._common import (
     add_system_options,
     check_option,
     float_list,
@@ -189,7 +189,7 @@ def compute_curves(spec: SystemSpec, alphas: list[float], speeds: list[float], l
     """``{alpha_f: {omega: [StaticResult, ...]}}`` over the given compliances, speeds and increasing loads."""
     from tqdm.auto import tqdm
 
-    from gfbjax.analyses.static import load_displacement
+    from ...analyses.static import load_displacement
 
     curves: dict[float, dict[float, list]] = {}
     total = len(alphas) * len(speeds) * len(loads)
@@ -218,7 +218,7 @@ def compute_curves(spec: SystemSpec, alphas: list[float], speeds: list[float], l
 def run(args: argparse.Namespace) -> int:
     import gfbjax
 
-    from gfbjax.analyses.static import solve_equilibrium
+    from ...analyses.static import solve_equilibrium
 
     t_start = time.perf_counter()
     spec = spec_from_args(args)
@@ -250,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_figures:
         import matplotlib.pyplot as plt
 
-        from gfbjax.plot.static import plot_equilibrium_locus, plot_load_displacement, plot_static_summary
+        from ...plot.static import plot_equilibrium_locus, plot_load_displacement, plot_static_summary
 
         fig = plot_static_summary(res, spec, path=out / "static_summary.png")
         plt.close(fig)
