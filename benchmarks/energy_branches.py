@@ -56,12 +56,13 @@ def main() -> None:
         b = continue_gfb_cycles(params, 0.05, a.end, default_cycle_settings(save_states=True))
         E = branch_energy(b, params)
         sec = time.perf_counter() - t0
-        ns = [float(s["lam"]) for s in b.special_of("NS")]
+        ns = [float(s.lam) for s in b.special_of("NS")]
         zc = sign_changes(b.lam, E.W_cb)
         first_down = next((c["Omega_bar"] for c in zc if c["from"] == "+"), None)
         wmax = first_local_max(np.asarray(b.lam), np.asarray(E.W_cb))
         ident = float(np.max(np.abs(E.W_fu - E.W_B) / np.maximum(np.abs(E.W_fu), 1e-300)))
-        rows.append({"design": name, "points": len(b), "reached": float(b.lam[-1]), "reason": b.reason,
+        rows.append({"design": name, "points": len(b), "reached": float(b.lam[-1]),
+                     "outcome": str(b.outcome), "message": b.message,
                      "NS_Omega_bar": ns, "W_cb_sign_changes": zc,
                      "first_NS": ns[0] if ns else None, "first_W_cb_drop_below_0": first_down,
                      "difference": (first_down - ns[0]) if (ns and first_down is not None) else None,

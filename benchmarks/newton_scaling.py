@@ -1,12 +1,19 @@
 """Benchmark (c): time per collocation Newton iteration against the state count n and the mesh intervals N.
 
-One Newton iteration = linearisation (Jacobian at the N*m Gauss points) + solution of the bordered collocation
-system.  Two backends on the same GFB orbit (the linear forced response at Omega_bar = 0.3):
+One Newton iteration = residual + linearisation (Jacobian at the N*m Gauss points) + solution of the bordered
+collocation system.  Two linear solvers on the same GFB orbit (the linear forced response at Omega_bar = 0.3):
 
-* ``sparse`` (``cont.sparse_colloc``): coloured Jacobian values, per-interval sparse LU, GMRES on the
-  n + 2 reduced unknowns; also the Arnoldi Floquet multipliers (12 largest);
-* ``dense`` (``cont.collocation``): condensation of parameters by batched dense QR, O(N (mn)^3); only where it
-  takes less than ``--dense-max-n`` states.
+* ``sparse`` (``cont.SparseSweep()``): coloured Jacobian values, per-interval sparse LU, GMRES on the
+  n + 2 reduced unknowns; also the Arnoldi Floquet multipliers (``cont.Arnoldi(k=12)``, 12 largest);
+* ``dense`` (``cont.DenseCondensation()``): condensation of parameters by batched dense QR, O(N (mn)^3); only
+  where it takes less than ``--dense-max-n`` states.
+
+Both are timed through the one Newton corrector, ``cont.bind_solver(problem, scheme, settings).correct(...)``,
+limited to one step (``NewtonSettings(max_iter=1)``): it evaluates twice (at the guess, then at the new iterate:
+residual, linearisation and solve each time), and the iteration time is the correction's time over its
+evaluations.  The dense evaluation also solves for the tangent (a second right-hand side of the same
+factorisation), the sparse one does not (its tangent is one more GMRES solve after convergence only).  The
+linearisation alone (``bound.linearise``: the factorised interval blocks) is timed for the sparse solver.
 
 Growth with N should be linear for both (per-interval work); growth with n is ~n^3 for dense, far less for sparse.
 
@@ -21,17 +28,19 @@ import os
 import platform
 import time
 from pathlib import Path
+from typing import Callable
 
 import gfbjax  # noqa: F401  (process defaults before any JAX work)
 import jax
 import numpy as np
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont.sparse_colloc import SparseCollocation
+from gfbjax import cont
 from gfbjax.analyses.cycles import gfb_cycle_problem, linear_response_start
 
 RESULTS = Path(__file__).resolve().parent / "results"
 OMEGA = 0.3
+ONE_STEP = cont.NewtonSettings(max_iter=1)  # one Newton step: two evaluations (guess, new iterate)
+N_MULTIPLIERS = 12
 
 
 def _best(fn, repeat: int) -> float:
@@ -43,29 +52,42 @@ def _best(fn, repeat: int) -> float:
     return float(np.min(ts))  # min over repeats: robust to other load on the machine
 
 
+def _best_of(timer: Callable[[], float], repeat: int) -> float:
+    """Minimum over ``repeat`` calls of a function that returns its own time."""
+    return float(min(timer() for _ in range(repeat)))
+
+
+def _per_iteration(bound, o: cont.Orbit, con: cont.Constraint) -> Callable[[], float]:
+    """A timer of one Newton iteration with ``bound``: one corrector step from ``o``, time over evaluations."""
+    def run() -> float:
+        t0 = time.perf_counter()
+        sol, _ = bound.correct(o, con, ONE_STEP)
+        jax.block_until_ready(sol.x)
+        return (time.perf_counter() - t0) / (int(sol.iterations) + 1)
+    return run
+
+
 def measure(nx: int, nz: int, N: int, m: int, repeat: int, dense: bool) -> dict:
     params = gfbjax.reference_system(Nx=nx, Nz=nz).nondim()
     prob = gfb_cycle_problem(params)
-    sch = col.Scheme(m)
+    sch = cont.Scheme(m)
     x_of_t, T, _ = linear_response_start(params, OMEGA)
-    o = col.orbit_from_function(x_of_t, T, OMEGA, sch, col.uniform_mesh(N))
-    con = col.natural_constraint(o, OMEGA)
-    rc, rper, rs = (np.asarray(a) for a in col.residual(prob.f, prob.args, o, con, sch))
-    sp = SparseCollocation(prob.f, prob.args, prob.n, prob.jac_sparsity, sch)
-
-    def sparse_iter():
-        sp.linearise(o, con).solve(-rc, -rper, -rs, sp.gmres_rtol)
-
+    o = cont.orbit_from_function(x_of_t, T, OMEGA, sch, cont.uniform_mesh(N))
+    con = cont.natural_constraint(o, OMEGA)
+    sp = cont.bind_solver(prob, sch, cont.CycleSettings(linear_solver=cont.SparseSweep()))
+    sparse_iter = _per_iteration(sp, o, con)
     sparse_iter()  # compile
+    lin = sp.linearise(o, con)  # the factorised blocks at o, as continuation keeps them for the multipliers
     rec = {"grid": f"{nx}x{nz}", "n": prob.n, "N": N, "m": m,
            "sparse_linearise_s": _best(lambda: sp.linearise(o, con), repeat),
-           "sparse_iteration_s": _best(sparse_iter, repeat),
-           "sparse_multipliers_s": _best(lambda: sp.multipliers(o), 1),
-           "colors": sp.coloring.n_colors}
+           "sparse_iteration_s": _best_of(sparse_iter, repeat),
+           "sparse_multipliers_s": _best(lambda: cont.Arnoldi(k=N_MULTIPLIERS).multipliers(lin, {}), 1),
+           "colors": cont.color_pattern(prob.jac_sparsity).n_colors}
     if dense:
-        step = lambda: jax.block_until_ready(col._step_and_tangent(prob.f, prob.args, o, con, sch))  # noqa: E731
+        step = _per_iteration(cont.bind_solver(prob, sch, cont.CycleSettings(linear_solver=cont.DenseCondensation())),
+                              o, con)
         step()  # compile
-        rec["dense_iteration_s"] = _best(step, max(1, repeat // 2))
+        rec["dense_iteration_s"] = _best_of(step, max(1, repeat // 2))
     return rec
 
 

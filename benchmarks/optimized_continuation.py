@@ -53,20 +53,21 @@ def main() -> None:
         t_fixed = time.perf_counter() - t0
         first_bif = next((s for s in b.special), None)
         first_unstable = next((float(b.lam[i]) for i in range(len(b)) if not b.stable[i]), None)
-        fixed_to = float(first_bif["lam"]) if first_bif is not None else first_unstable
+        fixed_to = float(first_bif.lam) if first_bif is not None else first_unstable
         sched = optimized_continuation(params, a.start, a.end, a.step, objective=a.objective, progress=True)
         opt_to = sched.bifurcation_free_to
         row = {"case": name, "fixed": {"first_bifurcation": None if first_bif is None else
-                                       {"type": first_bif["type"], "Omega_bar": float(first_bif["lam"])},
+                                       {"type": first_bif.type, "Omega_bar": float(first_bif.lam)},
                                        "first_unstable_point": first_unstable, "bifurcation_free_to": fixed_to,
-                                       "branch_reason": b.reason, "seconds": round(t_fixed, 1)},
+                                       "branch_outcome": str(b.outcome), "branch_message": b.message,
+                                       "seconds": round(t_fixed, 1)},
                "optimised": sched.to_dict(),
                "range_ratio": (opt_to - a.start) / (fixed_to - a.start) if (opt_to and fixed_to) else None,
                "upper_speed_ratio": opt_to / fixed_to if (opt_to and fixed_to) else None}
         rows.append(row)
         panels.append((name, sched))
         print(f"{name}: fixed foil bifurcation-free to {fixed_to}; optimised schedule to {opt_to} "
-              f"({sched.reason}); {sched.n_solves} solves, {sched.seconds:.0f} s", flush=True)
+              f"({sched.outcome}: {sched.message}); {sched.n_solves} solves, {sched.seconds:.0f} s", flush=True)
         Path(a.out).with_suffix(".json").write_text(json.dumps(
             {"grid": [a.nx, a.nz], "gumbel_width": a.gumbel_width, "start": a.start, "step": a.step,
              "objective": a.objective, "cases": rows}, indent=1))

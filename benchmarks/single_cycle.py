@@ -3,12 +3,15 @@
 
 The synchronous (1X) unbalance response of the reference system at Omega_bar = 0.3 (a stable cycle) is computed
 
-1. by the toolkit: collocation (m = 4, N = 16, the continuation defaults) with the sparse Newton corrector
-   (``cont.sparse_colloc.SparseCollocation``), started from the converged cycle at Omega_bar = 0.29 with the
-   period rescaled to T = 2 pi / 0.3 -- one continuation step's worth of work.  Timed after compilation (the JIT
-   caches are cleared, a first solve compiles, then the same solve from the same guess is repeated; the minimum
-   is reported, the compile time separately).  The leading Floquet multipliers (Arnoldi on the cached
-   linearisation, as continuation does) are timed separately.
+1. by the toolkit: collocation (m = 4, N = 16, the continuation defaults) with the Newton corrector on the
+   sparse linear solver (``cont.bind_solver(problem, scheme, settings).correct(...)`` with
+   ``linear_solver=cont.SparseSweep()``; the correction includes the tangent, as in continuation), started from
+   the converged cycle at Omega_bar = 0.29 with the period rescaled to T = 2 pi / 0.3 -- one continuation step's
+   worth of work.  Timed after compilation (the JIT caches are cleared, a first solve compiles, then the same
+   solve from the same guess is repeated; the minimum is reported, the compile time separately).  The leading
+   Floquet multipliers (``cont.analyse`` on the corrector's linearisation at the converged orbit, as continuation
+   does: Arnoldi, 12 largest) are timed separately.  On small grids the dense condensation
+   (``cont.DenseCondensation()``, all multipliers by periodic QR) is timed the same way.
 2. by brute force: diffrax time integration (``gfbjax.analyses.transient.simulate``, Kvaerno5, constant speed) from
    (i) the static equilibrium and (ii) the 0.29 cycle's state at unbalance phase 0, one revolution per call, until
    the journal over the last revolution agrees with the reference to the collocation's error (see below), at most
@@ -76,7 +79,6 @@ import scipy  # noqa: E402
 from scipy.integrate import solve_bvp  # noqa: E402
 
 from gfbjax import cont  # noqa: E402
-from gfbjax.cont.palc import SPARSE_MIN_N, DenseBackend, make_backend  # noqa: E402
 from gfbjax.analyses.cycles import (default_cycle_settings, gfb_cycle_problem, linear_response_start,  # noqa: E402
                            rotor_components)
 from gfbjax.model import forced_vector_field  # noqa: E402
@@ -161,32 +163,33 @@ class Case:
         return self.problem.n
 
 
-def newton_at(backend: Any, guess: cont.Orbit, omega: float, settings: cont.CycleSettings,
-              tight: float | None = None) -> cont.NewtonResult:
-    """Newton at fixed speed ``omega`` with the continuation's tolerances, or both tolerances ``tight``."""
+def newton_at(bound: Any, guess: cont.Orbit, omega: float, settings: cont.CycleSettings,
+              tight: float | None = None) -> tuple[cont.NewtonSolution, cont.Linearisation]:
+    """Newton at fixed speed ``omega`` with the continuation's tolerances, or all tolerances ``tight``; ``bound``
+    is a linear solver bound to the problem (:func:`gfbjax.cont.bind_solver`).  Returns the solution (``x`` the
+    orbit, ``aux`` the tangent) and the linearisation at the converged orbit."""
     con = cont.natural_constraint(guess, omega)
-    if tight is None:
-        kw = dict(tol=settings.newton_tol, rtol_step=settings.newton_step_tol, max_iter=settings.newton_max_iter)
-    else:
-        kw = dict(tol=tight, rtol_step=tight, max_iter=20)
-    r = backend.newton(guess, con, **kw)
-    if not r.converged:
-        raise RuntimeError(f"collocation Newton at Omega_bar = {omega} failed: {r.reason}")
-    return r
+    newton = (settings.newton if tight is None
+              else cont.NewtonSettings(tol=tight, atol_step=tight, rtol_step=tight, max_iter=20))
+    sol, lin = bound.correct(guess, con, newton)
+    if not sol.converged:
+        raise RuntimeError(f"collocation Newton at Omega_bar = {omega} failed: {sol.outcome} after "
+                           f"{int(sol.iterations)} iterations (residual {float(sol.residual):.2e})")
+    return sol, lin
 
 
 def nearby_guess(case: Case, settings: cont.CycleSettings, out: dict) -> cont.Orbit:
     """The converged cycle at OMEGA_GUESS (N=16, m=4) from the linear forced response (set-up, not benchmarked)."""
     scheme = cont.Scheme(COLL_M)
-    backend = make_backend(case.problem, scheme, settings)
+    bound = cont.bind_solver(case.problem, scheme, settings)
     (x_of_t, T, _), t_lin, _ = timed(lambda: linear_response_start(case.params, OMEGA_GUESS))
     start = cont.start_from_function(x_of_t, T, OMEGA_GUESS, settings)
-    r, t_newton, _ = timed(lambda: newton_at(backend, start.orbit, OMEGA_GUESS, settings))
-    out["guess"] = dict(omega=OMEGA_GUESS, m=COLL_M, N=COLL_N, newton_iterations=r.iterations,
+    (sol, _), t_newton, _ = timed(lambda: newton_at(bound, start.orbit, OMEGA_GUESS, settings))
+    out["guess"] = dict(omega=OMEGA_GUESS, m=COLL_M, N=COLL_N, newton_iterations=int(sol.iterations),
                         setup_s=dict(linear_response=t_lin, newton_first_call=t_newton))
-    print(f"  guess: cycle at Omega_bar = {OMEGA_GUESS} ({r.iterations} Newton iterations, "
+    print(f"  guess: cycle at Omega_bar = {OMEGA_GUESS} ({int(sol.iterations)} Newton iterations, "
           f"{t_lin + t_newton:.1f} s set-up)", flush=True)
-    o = r.orbit
+    o = sol.x
     return cont.Orbit(o.mesh, o.xm, o.xi, jnp.asarray(2.0 * math.pi / OMEGA), jnp.asarray(OMEGA))
 
 
@@ -194,46 +197,54 @@ def collocation_row(case: Case, guess: cont.Orbit, settings: cont.CycleSettings,
                     ) -> tuple[dict, cont.Orbit]:
     """Newton at OMEGA from ``guess``: cold (caches cleared: compile + solve) and warm (min over ``repeat``)."""
     scheme = cont.Scheme(COLL_M)
-    backend = (make_backend(case.problem, scheme, settings) if kind == "sparse"
-               else DenseBackend(case.problem, scheme, settings.floquet))
+    bound = cont.bind_solver(case.problem, scheme, settings)  # settings.linear_solver decides (kind)
     jax.clear_caches()
-    r, cold, _ = timed(lambda: newton_at(backend, guess, OMEGA, settings))
+    (sol, lin), cold, _ = timed(lambda: newton_at(bound, guess, OMEGA, settings))
     warm, warm_cpu = [], []
     for _ in range(repeat):
-        r, t, c = timed(lambda: newton_at(backend, guess, OMEGA, settings))
+        (sol, lin), t, c = timed(lambda: newton_at(bound, guess, OMEGA, settings))
         warm.append(t)
         warm_cpu.append(c)
-    # the multipliers of the last warm solve; the sparse backend reuses that solve's cached linearisation (as in
-    # continuation), the dense one compiles its transfer matrices on the first call: minimum of two calls
-    mu, t_mu1, _ = timed(lambda: backend.multipliers(r.orbit))
-    t_mu = min(t_mu1, timed(lambda: backend.multipliers(r.orbit))[1])
-    row = dict(method=f"collocation m={COLL_M} N={COLL_N} ({kind} Newton)", backend=type(backend).__name__,
+    # the multipliers of the last warm solve, as continuation computes them (cont.analyse with the settings'
+    # Floquet method): the sparse solver reuses that solve's factorised linearisation; the dense one computes (and
+    # on the first call compiles) the transfer matrices, which a linearisation caches, so each call gets a fresh
+    # linearisation at the converged orbit.  Minimum of two calls; the Arnoldi start carries over as along a branch.
+    memo: dict = {}
+
+    def multipliers() -> np.ndarray:
+        at = lin if kind == "sparse" else bound.linearise(sol.x)
+        return cont.analyse(case.problem, at, settings.floquet, memo)["spectrum"]
+
+    mu, t_mu1, _ = timed(multipliers)
+    t_mu = min(t_mu1, timed(multipliers)[1])
+    row = dict(method=f"collocation m={COLL_M} N={COLL_N} ({kind} Newton)",
+               backend=type(settings.linear_solver).__name__,
                wall_s=float(min(warm)), cpu_s=warm_cpu[int(np.argmin(warm))], warm_s=warm, cold_s=cold,
                compile_s=cold - float(min(warm)),
-               newton_iterations=r.iterations, residual=r.residual_norm,
+               newton_iterations=int(sol.iterations), residual=float(sol.residual),
                newton_tol=settings.newton_tol, newton_step_tol=settings.newton_step_tol,
                multipliers_s=t_mu, multipliers_first_call_s=t_mu1, n_multipliers=int(len(mu)),
                leading_multipliers=[[float(z.real), float(z.imag)] for z in np.asarray(mu)[:6]])
-    return row, r.orbit
+    return row, sol.x
 
 
 def reference(case: Case, start: cont.Orbit, start_scheme: cont.Scheme, settings: cont.CycleSettings,
               out: dict) -> tuple[cont.Orbit, cont.Scheme, np.ndarray]:
     """Fine collocation orbit (REF_M, REF_N) and its journal at PHASES; error estimate from REF_N_COARSE."""
     scheme = cont.Scheme(REF_M)
-    sset = dataclasses.replace(settings, linear_solver="sparse")
-    backend = make_backend(case.problem, scheme, sset)
+    sset = dataclasses.replace(settings, linear_solver=cont.SparseSweep())
+    bound = cont.bind_solver(case.problem, scheme, sset)
     x_of_t = lambda t: eval_at(start, start_scheme, t)  # noqa: E731
     res = {}
     for N in (REF_N_COARSE, REF_N):
         o0 = cont.orbit_from_function(x_of_t, 2.0 * math.pi / OMEGA, OMEGA, scheme, cont.uniform_mesh(N))
-        r, t, _ = timed(lambda: newton_at(backend, o0, OMEGA, sset, tight=1e-12))
+        (r, _), t, _ = timed(lambda: newton_at(bound, o0, OMEGA, sset, tight=1e-12))
         res[N] = (r, t)
-    orbit = res[REF_N][0].orbit
+    orbit = res[REF_N][0].x
     xy = at_phase(orbit, scheme, PHASES)[:, case.journal]
-    xy_c = at_phase(res[REF_N_COARSE][0].orbit, scheme, PHASES)[:, case.journal]
+    xy_c = at_phase(res[REF_N_COARSE][0].x, scheme, PHASES)[:, case.journal]
     out["reference"] = dict(method=f"collocation m={REF_M} N={REF_N}, sparse Newton, tol 1e-12",
-                            residual=res[REF_N][0].residual_norm, wall_s=res[REF_N][1],
+                            residual=float(res[REF_N][0].residual), wall_s=res[REF_N][1],
                             change_from_N_coarse=max_err(xy, xy_c), N_coarse=REF_N_COARSE,
                             amplitude=[float(v) for v in np.ptp(xy, axis=0)])
     print(f"  reference m={REF_M} N={REF_N}: {res[REF_N][1]:.1f} s, change from N={REF_N_COARSE}: "
@@ -445,7 +456,7 @@ def solve_bvp_row(case: Case, guess: cont.Orbit, ref_xy: np.ndarray, target: flo
 def study(nx: int, nz: int, *, bvp_timeout: float, max_revs: int, max_wall: float, repeat: int) -> dict:
     print(f"grid {nx}x{nz}", flush=True)
     case = Case.build(nx, nz)
-    settings = default_cycle_settings(linear_solver="sparse")
+    settings = default_cycle_settings(linear_solver=cont.SparseSweep())
     out: dict[str, Any] = dict(grid=case.grid, Nx=nx, Nz=nz, n=case.n, n_core=case.n - 2)
     guess = nearby_guess(case, settings, out)
     rows: list[dict] = []
@@ -459,11 +470,12 @@ def study(nx: int, nz: int, *, bvp_timeout: float, max_revs: int, max_wall: floa
     print(f"  collocation: {crow['wall_s']:.2f} s warm ({crow['cold_s']:.1f} s cold), "
           f"{crow['newton_iterations']} iterations, error {target:.2e}; multipliers {crow['multipliers_s']:.2f} s",
           flush=True)
-    if case.n < SPARSE_MIN_N:  # the toolkit's automatic choice on small grids
-        drow, dorbit = collocation_row(case, guess, dataclasses.replace(settings, linear_solver="dense"), "dense",
-                                       repeat)
+    if case.n < cont.SPARSE_MIN_N:  # the toolkit's automatic choice on small grids
+        drow, dorbit = collocation_row(case, guess, dataclasses.replace(settings,
+                                                                        linear_solver=cont.DenseCondensation()),
+                                       "dense", repeat)
         drow["error"] = max_err(at_phase(dorbit, cscheme, PHASES)[:, case.journal], ref_xy)
-        drow["note"] = f"linear_solver='auto' picks this backend for n < {SPARSE_MIN_N}"
+        drow["note"] = f"linear_solver=None (automatic) picks this solver for n < {cont.SPARSE_MIN_N}"
         rows.append(drow)
         print(f"  collocation (dense): {drow['wall_s']:.2f} s warm, error {drow['error']:.2e}", flush=True)
 

@@ -33,8 +33,8 @@ def run(load: float, points: int) -> dict:
     t_eq = time.perf_counter() - t0
     hopf = eq.special_of("HOPF")
     rec = {"load_N": load, "grid": f"{spec.Nx}x{spec.Nz}", "equilibria_s": round(t_eq, 1),
-           "hopf": [{"Omega_bar": float(h["lam"]), "rpm": spec.rpm(float(h["lam"])),
-                     "whirl_ratio": float(h["angle"]) / float(h["lam"]) if h.get("angle") else None}
+           "hopf": [{"Omega_bar": float(h.lam), "rpm": spec.rpm(float(h.lam)),
+                     "whirl_ratio": float(h.omega) / float(h.lam) if h.omega else None}
                     for h in hopf]}
     if not hopf:
         rec["cycles"] = "no Hopf point in 0.3..1.2"
@@ -43,14 +43,14 @@ def run(load: float, points: int) -> dict:
     t0 = time.perf_counter()
     b = continue_gfb_hopf_cycles(p, eq, 0, s, progress=True)
     amp = (b.xmax - b.xmin)[:, :2] / 2
-    lam_h = float(hopf[0]["lam"])
+    lam_h = float(hopf[0].lam)
     rec["cycles"] = {
-        "seconds": round(time.perf_counter() - t0, 1), "reason": b.reason,
+        "seconds": round(time.perf_counter() - t0, 1), "outcome": str(b.outcome), "message": b.message,
         "criticality": hopf_criticality(b, lam_h),
         "Omega_bar": b.lam.tolist(), "rpm": [spec.rpm(float(v)) for v in b.lam],
         "amplitude_xj_c": amp[:, 0].tolist(), "amplitude_yj_c": amp[:, 1].tolist(),
         "stable": b.stable.tolist(), "period": b.period.tolist(),
-        "special": [{"type": sp["type"], "Omega_bar": float(sp["lam"]), "rpm": spec.rpm(float(sp["lam"]))}
+        "special": [{"type": sp.type, "Omega_bar": float(sp.lam), "rpm": spec.rpm(float(sp.lam))}
                     for sp in b.special],
     }
     return rec
@@ -71,7 +71,7 @@ def main() -> None:
                   f"whirl ratio {h['whirl_ratio']:.3f}")
         c = r["cycles"]
         if isinstance(c, dict):
-            print(f"        cycles: {c['criticality']}, {len(c['Omega_bar'])} points, ended: {c['reason']}")
+            print(f"        cycles: {c['criticality']}, {len(c['Omega_bar'])} points, ended: {c['outcome']} ({c['message']})")
             for lam, rpm, ax, ay, st in zip(c["Omega_bar"], c["rpm"], c["amplitude_xj_c"], c["amplitude_yj_c"],
                                             c["stable"]):
                 print(f"        {lam:.5f} {rpm:8.0f} rpm  amp x {ax:.4f} c  y {ay:.4f} c  "

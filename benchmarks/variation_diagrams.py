@@ -41,9 +41,10 @@ def _branch(name: str, src: Path | None, kind: str, folder: str | None = None) -
 def summary(name: str, b: cont.Branch, seconds: float | None) -> dict:
     spec = gfbjax.variation(name)
     first_unstable = next((float(b.lam[i]) for i in range(len(b)) if not b.stable[i]), None)
-    sp = [{"type": s["type"], "Omega_bar": float(s["lam"]), "rpm": spec.rpm(float(s["lam"])),
-           "located": bool(s["located"]), "angle": s.get("angle")} for s in b.special]
-    return {"design": name, "points": len(b), "reached": float(b.lam[-1]), "reason": b.reason,
+    sp = [{"type": s.type, "Omega_bar": float(s.lam), "rpm": spec.rpm(float(s.lam)),
+           "located": bool(s.located), "angle": None if s.angle is None else float(s.angle)} for s in b.special]
+    return {"design": name, "points": len(b), "reached": float(b.lam[-1]),
+            "outcome": str(b.outcome), "message": b.message,
             "first_unstable_Omega_bar": first_unstable, "special": sp,
             "max_trivial_error": float(np.nanmax(b.trivial_error)) if b.kind == "cycles" else None,
             "seconds": None if seconds is None else round(seconds, 1)}
@@ -63,8 +64,8 @@ def main() -> None:
     g0, sec = _branch("G0", src, "equilibria", folder="G0eq")
     g0row = summary("G0", g0, sec)
     for s, raw in zip(g0row["special"], g0.special):
-        if s["type"] == "HOPF" and raw.get("angle") is not None:
-            s["whirl_ratio"] = float(raw["angle"]) / s["Omega_bar"]
+        if s["type"] == "HOPF" and raw.omega is not None:  # whirl frequency (Im of the critical eigenvalue)
+            s["whirl_ratio"] = float(raw.omega) / s["Omega_bar"]
     rows.append(g0row)
 
     print(f"{'design':<10} {'first bifurcation':<34} {'first unstable':>15} {'reached':>8}  all special points")
@@ -87,9 +88,9 @@ def main() -> None:
             ax.plot(lam, np.where(st, arr, np.nan), "b-", lw=1.4)
             ax.plot(lam, np.where(~st, arr, np.nan), "r--", lw=1.0)
         for s in b.special:
-            i = int(np.argmin(np.abs(lam - s["lam"])))
-            ax.plot(lam[i], b.xmax[i, 1], "D", color="tab:purple" if s["type"] == "NS" else "tab:orange")
-            ax.annotate(s["type"], (lam[i], b.xmax[i, 1]), textcoords="offset points", xytext=(4, 4), fontsize=8)
+            i = int(np.argmin(np.abs(lam - s.lam)))
+            ax.plot(lam[i], b.xmax[i, 1], "D", color="tab:purple" if s.type == "NS" else "tab:orange")
+            ax.annotate(s.type, (lam[i], b.xmax[i, 1]), textcoords="offset points", xytext=(4, 4), fontsize=8)
         ax.set_title(name, fontsize=10)
         ax.grid(alpha=0.3)
     for ax in axes[-1]:

@@ -1,30 +1,21 @@
 """gfbjax: nonlinear dynamics of rotors on gas foil bearings in JAX.
 
-Importing gfbjax turns on JAX's 64-bit mode: Newton corrections, Floquet multipliers that span many decades and
-finite-difference checks of gradients all need double precision.
+Importing gfbjax does two things to the process, both documented where they are done:
 
-Three process-wide defaults are set at import, before any JAX computation, and only where the user has not set
-them (they take effect only if the JAX backend was not initialised before gfbjax was imported):
+* it turns on JAX's 64-bit mode (``jax_enable_x64``): Newton corrections, Floquet multipliers that span many decades
+  and finite-difference checks of gradients all need double precision, and every solver assumes float64;
+* it calls :func:`gfbjax._process.configure_process`, which works around an XLA:CPU dead-lock of jaxlib's batched
+  LAPACK kernels (``XLA_FLAGS``, ``NPROC``) and slow multi-threaded BLAS on small machines
+  (``OPENBLAS_NUM_THREADS``), setting only the variables the user has not set, and warning when JAX was already
+  running (then they cannot take effect).  See that module for why and how to opt out.
 
-* ``XLA_FLAGS += --xla_cpu_enable_concurrency_optimized_scheduler=false``: the compiled collocation Newton step
-  dead-locks under XLA:CPU's concurrency-optimised scheduler (seen for n = 10, N >= 30 intervals).
-* ``NPROC = max(8, cpu_count + 4)``, the size of XLA:CPU's intra-op thread pool.  jaxlib's batched LAPACK kernels
-  (LU, triangular solve) split their batch over that pool and block until the pieces finish; when as many of them
-  run concurrently as the pool has threads, none of the pieces can run and the process hangs at 0% CPU.  With the
-  default pool of one thread per core a 2-core machine hangs on two concurrent kernels (reproduced with four
-  independent vmapped triangular solves; also seen in the batched maps and the gradient kernels).  Extra threads
-  only wait, so the larger pool costs nothing measurable (benchmarks in the session notes).
-* ``OPENBLAS_NUM_THREADS=1``: several BLAS threads on a busy 2-core machine slowed the small dense QR/LU
-  factorisations of the solvers ~100-1000x; it takes effect only if numpy was not imported before gfbjax.
+The allowed ranges of all inputs are in :mod:`gfbjax.limits`.
 """
 
-import os as _os
+from ._process import configure_process as _configure_process
 
-if "xla_cpu_enable_concurrency_optimized_scheduler" not in _os.environ.get("XLA_FLAGS", ""):
-    _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "")
-                                + " --xla_cpu_enable_concurrency_optimized_scheduler=false").strip()
-_os.environ.setdefault("NPROC", str(max(8, (_os.cpu_count() or 1) + 4)))
-_os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# warn_blas=False: importing numpy first is the normal order (see gfbjax._process); JAX started first is not.
+_configure_process(warn_blas=False)
 
 import jax  # noqa: E402
 

@@ -27,6 +27,10 @@ from typing import Any
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
+
+from . import limits
+from .limits import ParameterError
 
 __all__ = [
     "SystemSpec",
@@ -45,36 +49,6 @@ __all__ = [
 ROTORS = ("jeffcott", "rigid")
 
 
-class ParameterError(ValueError):
-    """Raised for an input outside its allowed range; the message names the field, its value and the range."""
-
-
-def _check_range(name: str, value: Any, lo: float | None, hi: float | None, *, lo_open: bool = False,
-                 hi_open: bool = False, unit: str = "") -> None:
-    """Check ``lo (<|<=) value (<|<=) hi`` and that value is a finite real number."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f"{name} must be a real number, got {value!r}")
-    if not math.isfinite(value):
-        raise ParameterError(f"{name} must be finite, got {value!r}")
-    bad = (lo is not None and (value <= lo if lo_open else value < lo)) or (
-        hi is not None and (value >= hi if hi_open else value > hi))
-    if bad:
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
-        lo_s = "-inf" if lo is None else f"{lo:g}"
-        hi_s = "inf" if hi is None else f"{hi:g}"
-        u = f" {unit}" if unit else ""
-        raise ParameterError(f"{name} = {value!r}{u} is outside the allowed range {left}{lo_s}, {hi_s}{right}{u}")
-
-
-def _check_int(name: str, value: Any, lo: int, hi: int, why: str = "") -> None:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ParameterError(f"{name} must be an integer, got {value!r}")
-    if not lo <= value <= hi:
-        extra = f" ({why})" if why else ""
-        raise ParameterError(f"{name} = {value} is outside the allowed range [{lo}, {hi}]{extra}")
-
-
 def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, p0: float, c: float) -> float:
     """Dimensionless bump-foil compliance per area (paper, Abbreviations; Heshmat's bump formula [27]).
 
@@ -90,16 +64,16 @@ def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, 
         c: radial clearance [m].
     """
     for name, v in (("l0", l0), ("t_b", t_b), ("s0", s0), ("E", E), ("p0", p0), ("c", c)):
-        _check_range(name, v, 0.0, None, lo_open=True)
-    _check_range("nu", nu, 0.0, 0.5, hi_open=True)
+        limits.POSITIVE.check(v, name)
+    limits.POISSON.check(nu)
     return 2.0 * p0 * (l0 / t_b) ** 3 * (1.0 - nu**2) * s0 / (c * E)
 
 
 def unbalance_eccentricity(G: float, omega_r: float = 2500.0) -> float:
     """Unbalance eccentricity ``e_u = G / Omega_r`` [m] for ISO 1940 grade ``G`` [mm/s] at service speed
     ``omega_r`` [rad/s] (paper Eq. 16 in consistent units: G2.5 at 2500 rad/s gives 1.0 um)."""
-    _check_range("G", G, 0.0, 100.0, unit="mm/s")
-    _check_range("omega_r", omega_r, 0.0, None, lo_open=True, unit="rad/s")
+    G = limits.BALANCE_GRADE.check(G)
+    omega_r = limits.OMEGA_R.check(omega_r)
     return G * 1e-3 / omega_r
 
 
@@ -129,9 +103,14 @@ class SystemSpec:
         theta0: angle of the foil's fixed end [rad], from the horizontal x axis towards the vertical y axis
             (y points up; the rotor spins from x towards y).  Default pi/2: the foil is clamped at the top.
         load: extra static vertical load per bearing [N], downwards, added to gravity.
-        Nx: circumferential finite-difference intervals over the 2 pi of the foil.
-        Nz: axial intervals over the half length (edge to mid-plane).
+        Nx: circumferential finite-difference intervals over the 2 pi of the foil, in [16, 1024].
+        Nz: axial intervals over the half length (edge to mid-plane), in [2, 256].  The grid has
+            ``(Nx - 1)(Nz + 1)`` film and foil states plus the rotor's; at most
+            :data:`gfbjax.limits.MAX_DENSE_UNKNOWNS` (6144) in all, because every analysis builds dense Jacobians.
         gumbel_width: width of the smoothed ``max(p - 1, 0)`` of the Gumbel condition [-]; 0 = exact max.
+
+    Every field is checked on construction against its range in :mod:`gfbjax.limits` (ParameterError naming the
+    field, the value and the range); NumPy numbers are accepted and stored as Python numbers.
     """
 
     R: float = 19.05e-3
@@ -156,36 +135,39 @@ class SystemSpec:
     gumbel_width: float = 0.0
 
     def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):  # NumPy / 0-d JAX numbers -> Python numbers (JSON, static jit fields)
+            v = getattr(self, f.name)
+            if isinstance(v, np.generic) or (hasattr(v, "__array__") and np.ndim(v) == 0
+                                             and not limits.is_traced(v)):
+                object.__setattr__(self, f.name, np.asarray(v).item())
         self.validate()
 
     # -- checks -------------------------------------------------------------------------------------------
     def validate(self) -> None:
-        """Check every field; raise :class:`ParameterError` naming the first field out of range."""
-        _check_range("R", self.R, 0.0, 10.0, lo_open=True, unit="m")
-        _check_range("L", self.L, 0.0, 10.0, lo_open=True, unit="m")
-        _check_range("c", self.c, 0.0, 0.05 * self.R, lo_open=True, unit="m")
-        _check_range("mu", self.mu, 0.0, 1.0, lo_open=True, unit="Pa s")
-        _check_range("p0", self.p0, 0.0, 1e8, lo_open=True, unit="Pa")
-        _check_range("g", self.g, 0.0, 1e3, unit="m/s^2")
-        _check_range("m_j", self.m_j, 0.0, 1e5, lo_open=True, unit="kg")
-        if self.rotor not in ROTORS:
+        """Check every field against its range in :mod:`gfbjax.limits`; raise :class:`ParameterError` naming the
+        first field out of range.  NumPy numbers are accepted (``Nx=np.int64(16)``)."""
+        for name, rng in (("R", limits.R), ("L", limits.L)):
+            rng.check(getattr(self, name))
+        R = float(self.R)
+        limits.CLEARANCE.with_bounds(hi=limits.MAX_CLEARANCE_OVER_R * R).check(self.c)
+        for name, rng in (("mu", limits.MU), ("p0", limits.P0), ("g", limits.GRAVITY), ("m_j", limits.M_J)):
+            rng.check(getattr(self, name))
+        if not isinstance(self.rotor, str) or self.rotor not in ROTORS:
             raise ParameterError(f"rotor = {self.rotor!r} is not one of {ROTORS}")
         if self.rotor == "jeffcott":
-            _check_range("m_d", self.m_d, 0.0, 1e5, lo_open=True, unit="kg")
-            _check_range("k_s_bar", self.k_s_bar, 0.0, 1e4, lo_open=True)
-        _check_range("alpha_f", self.alpha_f, 0.0, 100.0, lo_open=True)
-        # eta = 0 would make Eq. (10) algebraic (a massless undamped strip): not an ODE any more.
-        _check_range("eta", self.eta, 0.0, 100.0, lo_open=True)
+            limits.M_D.check(self.m_d)
+            limits.K_S_BAR.check(self.k_s_bar)
+        limits.ALPHA_F.check(self.alpha_f)
+        limits.ETA.check(self.eta)
         if self.e_u is None:
-            _check_range("G", self.G, 0.0, 100.0, unit="mm/s")
-            _check_range("omega_r", self.omega_r, 0.0, None, lo_open=True, unit="rad/s")
+            limits.BALANCE_GRADE.check(self.G)
+            limits.OMEGA_R.check(self.omega_r)
         else:
-            _check_range("e_u", self.e_u, 0.0, self.c, unit="m")
-        _check_range("theta0", self.theta0, -2 * math.pi, 2 * math.pi, unit="rad")
-        _check_range("load", self.load, 0.0, None, unit="N")
-        _check_int("Nx", self.Nx, 16, 1024, "fewer than 16 intervals cannot resolve the film's converging wedge")
-        _check_int("Nz", self.Nz, 2, 256, "at least 2 axial intervals over the half length")
-        _check_range("gumbel_width", self.gumbel_width, 0.0, 0.1)
+            limits.E_U.with_bounds(hi=float(self.c)).check(self.e_u)
+        limits.THETA0.check(self.theta0)
+        limits.LOAD.check(self.load)
+        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
+        limits.GUMBEL_WIDTH.check(self.gumbel_width)
 
     # -- derived scales -----------------------------------------------------------------------------------
     @property
@@ -210,11 +192,14 @@ class SystemSpec:
         return m * self.g
 
     def omega_bar(self, rpm: float) -> float:
-        """Dimensionless speed of a shaft speed in rpm."""
+        """Dimensionless speed ``Omega_bar = Omega t*`` of a shaft speed in rev/min (a finite number; NaN or
+        infinity raise :class:`ParameterError`).  Arrays are converted element by element."""
+        _check_finite("rpm", rpm)
         return rpm * 2 * math.pi / 60 * self.t_star
 
     def rpm(self, omega_bar: float) -> float:
-        """Shaft speed in rpm of a dimensionless speed."""
+        """Shaft speed in rev/min of a dimensionless speed (a finite number; NaN or infinity raise)."""
+        _check_finite("omega_bar", omega_bar)
         return omega_bar / self.t_star * 60 / (2 * math.pi)
 
     def replace(self, **changes: Any) -> "SystemSpec":
@@ -254,6 +239,26 @@ class SystemSpec:
 _FIELDS = {f.name for f in dataclasses.fields(SystemSpec)}
 
 
+def _n_rotor(rotor: str) -> int:
+    """Rotor states of a rotor kind (gfbjax.model.rotor.N_ROTOR; imported here, not at the top: the model package
+    imports this module)."""
+    from .model.rotor import N_ROTOR
+
+    return N_ROTOR[rotor]
+
+
+def _check_finite(name: str, value: Any) -> None:
+    """ParameterError unless every element of ``value`` is a finite real number (tracers pass)."""
+    if limits.is_traced(value):
+        return
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must be finite, got {value!r}")
+
+
 class Params(eqx.Module):
     """Dimensionless parameters of the GFB-rotor system (a PyTree: ``jax.grad``/``jax.vmap`` reach the floats).
 
@@ -279,6 +284,30 @@ class Params(eqx.Module):
     Nz: int = eqx.field(static=True)
     rotor: str = eqx.field(static=True, default="jeffcott")
     gumbel_width: float = eqx.field(static=True, default=0.0)
+
+    def check(self) -> "Params":
+        """Check the physical fields of concrete parameters against :mod:`gfbjax.limits` and return ``self``.
+
+        ``kappa``, ``zeta`` > 0; ``sigma``, ``w_ext`` >= 0; ``alpha_f`` in (0, 100], ``eta`` in (0, 100] (as in
+        :class:`SystemSpec`); ``eps`` in [0, 1]; ``theta0`` in [-2 pi, 2 pi]; for the Jeffcott rotor ``k_s`` and
+        ``mass_ratio`` > 0; the grid as in :class:`SystemSpec`.  The analyses that take Params call it at their
+        entry, so that hand-made Params (``eqx.tree_at``) are checked as a SystemSpec is.  Leaves that are JAX
+        tracers (inside ``jit``/``vmap``/``grad``) are skipped; array leaves are checked element by element.
+        Not run on construction: zero tangents and filter specs are Params too.
+        """
+        if not isinstance(self.rotor, str) or self.rotor not in ROTORS:
+            raise ParameterError(f"rotor = {self.rotor!r} is not one of {ROTORS}")
+        fields = [("kappa", limits.KAPPA), ("zeta", limits.ZETA), ("sigma", limits.SIGMA),
+                  ("alpha_f", limits.ALPHA_F), ("eta", limits.ETA), ("eps", limits.EPS), ("w_ext", limits.W_EXT),
+                  ("theta0", limits.THETA0)]
+        if self.rotor == "jeffcott":
+            fields += [("k_s", limits.K_S_BAR.with_bounds(name="k_s")),
+                       ("mass_ratio", limits.MASS_RATIO)]
+        for name, rng in fields:
+            rng.check_all(getattr(self, name), f"Params.{name}")
+        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
+        limits.GUMBEL_WIDTH.check(self.gumbel_width)
+        return self
 
 
 # -- named systems ----------------------------------------------------------------------------------------
@@ -311,7 +340,7 @@ def validation_case(load_per_bearing: float = 10.0, **overrides: Any) -> SystemS
     Args:
         load_per_bearing: static load per bearing [N] (10 N in the text, 15 N in Table 1).
     """
-    _check_range("load_per_bearing", load_per_bearing, 0.0, None, lo_open=True, unit="N")
+    limits.LOAD_PER_BEARING.check(load_per_bearing)
     p0, c, g = 1.01325e5, 31.8e-6, 9.81
     spec = dict(R=19.05e-3, L=38.1e-3, c=c, mu=1.95e-5, p0=p0, g=g, m_j=load_per_bearing / g, m_d=1.0,
                 alpha_f=p0 / (4.6417e9 * c), eta=0.25, G=0.0, rotor="rigid")
@@ -342,6 +371,9 @@ def load_config(path: str | Path) -> SystemSpec:
         except tomllib.TOMLDecodeError as exc:
             raise ParameterError(f"config file {str(path)!r} is not valid TOML: {exc}") from exc
     base = data.pop("base", "reference")
+    if not isinstance(base, str):
+        raise ParameterError(f"base = {base!r} in {str(path)!r} must be the name of a built-in system (a string), "
+                             "e.g. base = \"reference\"")
     unknown = set(data) - _FIELDS
     if unknown:
         raise ParameterError(f"unknown key(s) {sorted(unknown)} in {str(path)!r}; allowed: {sorted(_FIELDS)}")

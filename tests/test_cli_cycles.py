@@ -77,7 +77,7 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
         assert z["multipliers"].shape[0] == lam.size
     summary = json.loads((out / "cycles.json").read_text())
     assert summary["counts"]["points"] == lam.size
-    assert summary["reason"] == meta["reason"]
+    assert summary["outcome"] == meta["outcome"] and summary["message"] == meta["message"]
     assert summary["range"]["reached_end"] == (code == 0)
     assert set(summary["timings_s"]) >= {"continuation", "total"}
     assert "special points" in stdout

@@ -1,9 +1,10 @@
 """Implicit sensitivities of W_cb and of the leading Floquet multiplier modulus with respect to the foil
-properties (gfbjax.design.evaluate, gfbjax.cont.implicit), against central finite differences of re-converged cycles;
+properties (gfbjax.design.evaluate, the implicit derivatives of gfbjax.cont), against central finite differences of re-converged cycles;
 the sparse path against the dense one.  Small grid (Nx=16, Nz=2), Omega_bar = 0.3.
 
-The dense design uses the adjoint mode (one transposed condensed solve per objective), the sparse one the tangent
-mode (one solve per design variable); a second dense design forces the tangent mode.
+Both linear solvers use the adjoint mode by default (one transposed solve per objective); a second dense design
+forces the tangent mode (one solve per design variable), and the sparse adjoint is checked against the dense one
+and against the sparse tangent mode.
 
 Measured (2-core CPU): implicit vs central differences (h = 1e-4 alpha_f, 1e-5 eta) agree to 5e-9 (W_cb) and
 4e-7 (max|mu|) relative; sparse and dense implicit derivatives agree to ~1e-13.
@@ -14,6 +15,7 @@ import numpy as np
 import pytest
 
 import gfbjax
+from gfbjax.cont import DenseCondensation, SparseSweep
 from gfbjax.design.evaluate import FoilDesign
 from gfbjax.params import ParameterError
 
@@ -27,7 +29,7 @@ def params():
 
 @pytest.fixture(scope="module")
 def dense(params):
-    d = FoilDesign(params, 0.3, linear_solver="dense")
+    d = FoilDesign(params, 0.3, linear_solver=DenseCondensation())
     return d, d.evaluate(A, E, gradient=True)
 
 
@@ -47,7 +49,7 @@ def test_gradients_against_central_differences(dense):
 def test_adjoint_matches_tangent(params, dense):
     d, ev = dense
     assert d.gradient_mode == "adjoint"
-    t = FoilDesign(params, 0.3, linear_solver="dense", gradient_mode="tangent")
+    t = FoilDesign(params, 0.3, linear_solver=DenseCondensation(), gradient_mode="tangent")
     assert t.gradient_mode == "tangent"
     et = t.evaluate(A, E, gradient=True, guess=ev.orbit)
     print("adjoint", ev.grad_W_cb, ev.grad_max_mu, "tangent", et.grad_W_cb, et.grad_max_mu)
@@ -55,16 +57,22 @@ def test_adjoint_matches_tangent(params, dense):
     np.testing.assert_allclose(ev.grad_max_mu, et.grad_max_mu, rtol=1e-9)
 
 
-def test_adjoint_needs_dense_backend(params):
-    with pytest.raises(ParameterError, match="gradient_mode"):
-        FoilDesign(params, 0.3, linear_solver="sparse", gradient_mode="adjoint")
+def test_sparse_adjoint_matches_sparse_tangent(params, dense):
+    _, ev = dense
+    a = FoilDesign(params, 0.3, linear_solver=SparseSweep(), gradient_mode="adjoint").evaluate(A, E, gradient=True)
+    t = FoilDesign(params, 0.3, linear_solver=SparseSweep(), gradient_mode="tangent").evaluate(A, E, gradient=True)
+    np.testing.assert_allclose(a.grad_W_cb, t.grad_W_cb, rtol=1e-8)
+    np.testing.assert_allclose(a.grad_max_mu, t.grad_max_mu, rtol=1e-7)
+
+
+def test_bad_gradient_mode(params):
     with pytest.raises(ParameterError, match="gradient_mode"):
         FoilDesign(params, 0.3, gradient_mode="reverse")
 
 
 def test_sparse_path_matches_dense(params, dense):
     _, ev = dense
-    s = FoilDesign(params, 0.3, linear_solver="sparse").evaluate(A, E, gradient=True)
+    s = FoilDesign(params, 0.3, linear_solver=SparseSweep()).evaluate(A, E, gradient=True)
     assert abs(s.W_cb - ev.W_cb) < 1e-12
     assert abs(s.max_mu - ev.max_mu) < 1e-8  # sparse multipliers: linearisation of the last Newton iterate
     assert np.allclose(s.grad_W_cb, ev.grad_W_cb, rtol=1e-8)

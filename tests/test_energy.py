@@ -18,7 +18,7 @@ from gfbjax.model.reynolds import bearing_force, gauge, mean_gauge_pressure
 def _cycle(params, omega, N=16):
     st = default_cycle_settings(max_points=1, save_states=True, N=N)
     br = continue_gfb_cycles(params, omega, 1.0, st)
-    assert len(br) == 1, br.reason
+    assert len(br) == 1, br.message
     return cont.start_from_branch(br, 0).orbit
 
 

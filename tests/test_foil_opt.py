@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import gfbjax
+from gfbjax.cont import Outcome
 from gfbjax.design.evaluate import FoilDesign
 from gfbjax.design.schedule import optimize_at_speed, optimized_continuation
 from gfbjax.params import ParameterError
@@ -41,7 +42,7 @@ def test_optimized_continuation_records_and_stops(smooth):
     s = optimized_continuation(smooth, 0.3, 0.4, 0.05, objective="max_mu", N=8)
     assert s.omega == pytest.approx([0.3, 0.35, 0.4])
     assert all(s.stable) and s.bifurcation_free_to == pytest.approx(0.4)
-    assert s.reason.startswith("reached")
+    assert s.outcome is Outcome.REACHED_END, s.message
     assert len(s.alpha_f) == len(s.W_cb) == len(s.multipliers) == 3
     with pytest.raises(ParameterError, match="d_omega"):
         optimized_continuation(smooth, 0.3, 0.4, 0.0)

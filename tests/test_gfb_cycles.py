@@ -29,7 +29,7 @@ from scipy.integrate import solve_ivp
 
 import gfbjax
 from gfbjax import cont
-from gfbjax.cont.floquet import nontrivial, trivial_error
+from gfbjax.cont import nontrivial, trivial_error
 from gfbjax.analyses.cycles import gfb_cycle_problem, linear_response_start, rotor_components
 from gfbjax.model import forced_vector_field
 from gfbjax.analyses.transient import TransientSettings, simulate
@@ -68,10 +68,13 @@ def cycle(params, request):
     start = cont.start_from_function(x_of_t, T, OMEGA, settings)
     prob = gfb_cycle_problem(params)
     scheme = cont.Scheme(M_COLL)
-    res = cont.newton(prob.f, prob.args, start.orbit, cont.natural_constraint(start.orbit, OMEGA), scheme)
-    assert res.status == 0, res.reason
-    orbit = res.orbit
-    mu, stable, terr = cont.analyse(prob, orbit, scheme)
+    dense = cont.CycleSettings(m=M_COLL, newton_tol=1e-10, newton_step_tol=1e-10,
+                               linear_solver=cont.DenseCondensation())
+    res, lin = cont.correct_cycle(prob, start.orbit, settings=dense)
+    assert res.outcome is cont.Outcome.CONVERGED, res.outcome
+    orbit = res.x
+    an = cont.analyse(prob, lin)
+    mu, stable, terr = an["spectrum"], an["stable"], an["trivial_error"]
     # the orbit at the transient's sample phases: the oscillator (u, v) = (cos phi, sin phi) fixes the phase,
     # phi(t) = phi(0) + 2 pi t on the cycle (checked in the tests)
     xm = np.asarray(orbit.xm)
@@ -171,8 +174,6 @@ def test_trivial_multiplier(cycle):
 def test_sparse_backend_matches_dense(params, cycle):
     """The sparse backend (per-interval sparse LU, GMRES, Arnoldi) on the GFB: the same Newton solution and the
     same leading multipliers as the dense condensation, and a Jacobian pattern that holds on the cycle."""
-    from gfbjax.cont.sparse_colloc import SparseCollocation
-
     prob = gfb_cycle_problem(params)
     scheme, OMEGA = cycle["scheme"], cycle["omega"]
     J = np.asarray(jax.vmap(jax.jacfwd(lambda x: prob.f(x, jnp.asarray(OMEGA), params)))(cycle["orbit"].xm))
@@ -180,11 +181,12 @@ def test_sparse_backend_matches_dense(params, cycle):
 
     x_of_t, T, _ = linear_response_start(params, OMEGA)
     guess = cont.orbit_from_function(x_of_t, T, OMEGA, scheme, cont.uniform_mesh(N_AT[OMEGA]))
-    sp = SparseCollocation(prob.f, prob.args, prob.n, prob.jac_sparsity, scheme)
-    res = sp.newton(guess, cont.natural_constraint(guess, OMEGA), tol=1e-10, rtol_step=1e-10)
-    assert res.converged, res.reason
-    d = float(jnp.max(jnp.abs(res.orbit.to_flat() - cycle["orbit"].to_flat())))
+    sparse = cont.CycleSettings(m=scheme.m, newton_tol=1e-10, newton_step_tol=1e-10,
+                                linear_solver=cont.SparseSweep())
+    res, lin = cont.correct_cycle(prob, guess, settings=sparse)
+    assert res.converged, res.outcome
+    d = float(jnp.max(jnp.abs(res.x.to_flat() - cycle["orbit"].to_flat())))
     assert d < 1e-8, d
-    mu = sp.multipliers(res.orbit)
+    mu = cont.analyse(prob, lin)["spectrum"]
     np.testing.assert_allclose(np.abs(mu[:8]), np.abs(cycle["mu"][:8]), atol=1e-8)
     assert trivial_error(mu) < 1e-8

@@ -1,4 +1,4 @@
-"""Batched (vmapped) energy maps (gfbjax.design.maps, gfbjax.cont.batch) against the point-by-point loop over the same
+"""Batched (vmapped) energy maps (gfbjax.design.maps, gfbjax.cont.batched_newton) against the point-by-point loop over the same
 dense Newton corrector from the same start, on a small grid (Nx=16, Nz=2, N=8, Omega_bar 0.4).
 
 The batch and the loop agree to 1e-9 relative (same start, same phase condition).  The 3 x 2 grid spans the foil bounds, so it holds points that converge from the reference foil's cycle and points

@@ -15,6 +15,7 @@ balance that puts collocation Newton well inside its basin.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -27,11 +28,13 @@ from .. import cont
 from ..model import core_rates, layout, vector_field
 from ..model.pattern import jacobian_sparsity
 from ..params import ParameterError, Params
+from ..params import SystemSpec
 from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
            "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "rotor_components",
-           "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles", "hopf_criticality"]
+           "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles", "hopf_criticality",
+           "CONVENTIONS", "branch_meta", "branch_units", "describe_branch"]
 
 JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
 
@@ -56,7 +59,7 @@ def gfb_cycle_problem(params: Params) -> cont.CycleProblem:
     """Periodic orbits of the autonomous unbalanced system, Eq. (21), in Omega_bar (one trivial multiplier).
 
     The problem carries the Jacobian's sparsity pattern: on fine grids the continuation uses the sparse
-    per-interval LU of :mod:`gfbjax.cont.sparse_colloc` (``CycleSettings.linear_solver='auto'``)."""
+    per-interval LU of sparse linear solver of :mod:`gfbjax.cont` (``CycleSettings.linear_solver=None``, automatic)."""
     lay = layout(params, oscillator=True)
     return cont.CycleProblem(f=_f_cycles, n=lay.n, args=params, n_trivial=1,
                              record=rotor_components(params, True), jac_sparsity=jacobian_sparsity(params))
@@ -125,13 +128,19 @@ def _check_speed_range(omega_start: float, omega_end: float) -> None:
 
 def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
                         settings: cont.CycleSettings | None = None, *, progress: bool = False,
-                        callback: Callable[[int, Any], Any] | None = None) -> cont.Branch:
+                        callback: Callable[[int, Any], Any] | None = None,
+                        spec: SystemSpec | None = None) -> cont.Branch:
     """Branch of unbalance-response limit cycles from ``omega_start`` towards ``omega_end`` (Omega_bar).
 
     The start is the linear forced response at ``omega_start`` (corrected by collocation Newton); the branch
     follows pseudo-arclength continuation with Floquet multipliers and LPC/PD/NS detection.  ``settings`` may
     omit the speed bounds: they are set from the range.  Whatever ends the branch, the finished points are
-    returned with the reason (``Branch.reason``).
+    returned with the reason (``Branch.outcome``, ``Branch.message``).
+
+    The branch describes itself (:func:`branch_meta`): ``meta`` holds the dimensionless groups, the grid, the
+    state layout and the conventions, and with ``spec`` (the SystemSpec ``params`` came from) also the SI system
+    and the rpm conversion; ``component_names`` are x_j, y_j (, x_d, y_d); ``units`` those of each array.
+    ParameterError when ``spec`` is not the system of ``params``.
     """
     _check_speed_range(omega_start, omega_end)
     if float(params.eps) <= 0.0:
@@ -144,24 +153,30 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
 
     settings = dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
                                    direction=direction)
+    meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast
     x_of_t, T, _ = linear_response_start(params, omega_start)
     start = cont.start_from_function(x_of_t, T, omega_start, settings)
-    return cont.continue_cycles(gfb_cycle_problem(params), settings, start, progress=progress, callback=callback)
+    branch = cont.continue_cycles(gfb_cycle_problem(params), settings, start, progress=progress, callback=callback)
+    return describe_branch(branch, meta)
 
 
 def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int = 0,
                              settings: cont.CycleSettings | None = None, *, progress: bool = False,
-                             callback: Callable[[int, Any], Any] | None = None) -> cont.Branch:
+                             callback: Callable[[int, Any], Any] | None = None,
+                             spec: SystemSpec | None = None) -> cont.Branch:
     """Self-excited cycles from the ``which``-th Hopf point of an equilibrium branch (:func:`continue_gfb_equilibria`).
 
     The branch leaves the Hopf point along its first harmonic; toward higher speed with stable cycles when the
     Hopf bifurcation is supercritical, toward lower speed with unstable ones when it is subcritical (the sign of
-    ``Branch.tangent_lam`` on the first points tells which).  ``settings.lam_min``/``lam_max`` bound the speed."""
+    ``Branch.tangent_lam`` on the first points tells which).  ``settings.lam_min``/``lam_max`` bound the speed.
+    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``)."""
     settings = settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=80)
+    meta = branch_meta(params, "self_excited", spec)
     hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
     start = cont.start_from_hopf(hp, settings)
-    return cont.continue_cycles(gfb_self_excited_problem(params), settings, start, progress=progress,
-                                callback=callback)
+    branch = cont.continue_cycles(gfb_self_excited_problem(params), settings, start, progress=progress,
+                                  callback=callback)
+    return describe_branch(branch, meta)
 
 
 def hopf_criticality(cycles: cont.Branch, lam_hopf: float) -> str:
@@ -177,9 +192,14 @@ def hopf_criticality(cycles: cont.Branch, lam_hopf: float) -> str:
 
 
 def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float,
-                            settings: cont.EquilibriumSettings | None = None, **kw: Any) -> cont.Branch:
-    """Branch of static equilibria of the balanced system in Omega_bar, with eigenvalues, Hopf and fold points."""
+                            settings: cont.EquilibriumSettings | None = None, *, spec: SystemSpec | None = None,
+                            **kw: Any) -> cont.Branch:
+    """Branch of static equilibria of the balanced system in Omega_bar, with eigenvalues, Hopf and fold points.
+
+    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``);
+    ``kw`` goes to :func:`gfbjax.cont.continue_equilibria` (``callback``, ``progress``)."""
     _check_speed_range(omega_start, omega_end)
+    meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:
         raise RuntimeError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")
@@ -191,4 +211,114 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
     upd = {k: v for k, v in (("lam_min", lo), ("lam_max", hi),
                              ("direction", 1 if omega_end > omega_start else -1)) if k in fields}
     settings = dataclasses.replace(settings, **upd)
-    return cont.continue_equilibria(gfb_equilibrium_problem(params), settings, eq.state, omega_start, **kw)
+    branch = cont.continue_equilibria(gfb_equilibrium_problem(params), settings, eq.state, omega_start, **kw)
+    return describe_branch(branch, meta)
+
+
+# -- self-describing branches -------------------------------------------------------------------------------
+
+#: Conventions of every branch of this module (DESIGN.md, :mod:`gfbjax.params`), written into ``Branch.meta``
+#: so that a branch file can be read without gfbjax at hand.
+CONVENTIONS = {
+    "time": "tau = t / t*, t* = 6 mu R^2 / (p0 c^2) [s]",
+    "speed": "Omega_bar = Omega t*, the bearing number Lambda = 6 mu Omega R^2 / (p0 c^2); "
+             "rpm = Omega_bar / t* * 60 / (2 pi)",
+    "lengths": "over the nominal radial clearance c",
+    "pressures": "over the ambient pressure p0",
+    "forces": "over p0 R L",
+    "axes": "x horizontal, y vertical and pointing up (gravity along -y); the rotor spins from x towards y",
+    "theta0": "angle of the foil's fixed end [rad], from the x axis towards the y axis",
+    "unbalance": "eps = e_u / c with e_u = G / omega_r (ISO 1940, G in mm/s) unless e_u is given",
+    "rotor_states": "jeffcott: x_j, y_j, x_d, y_d and their d/dtau; rigid: x_j, y_j and their d/dtau",
+}
+
+_PROBLEMS = {
+    "unbalance_response": "synchronous limit cycles of the unbalanced rotor, autonomous form Eq. (21)-(22) "
+                          "with the phase oscillator (one trivial Floquet multiplier)",
+    "self_excited": "self-excited whirl cycles of the rotor without unbalance forcing (no oscillator), from a "
+                    "Hopf point of its equilibria",
+    "equilibria": "static equilibria of the rotor without unbalance forcing; multipliers are the Jacobian's "
+                  "eigenvalues",
+}
+
+
+def branch_units(kind: str) -> dict[str, str]:
+    """Units of the arrays of a GFB branch of ``kind`` ("cycles" or "equilibria"), for ``Branch.units``."""
+    return {"lam": "Omega_bar = Omega t* (dimensionless speed)",
+            "period": "tau = t / t*" if kind == "cycles" else "tau = t / t* (NaN: equilibria have none)",
+            "l2": "dimensionless (norm of the whole state: pressures over p0, lengths over c, d/dtau)",
+            "xmax": "over clearance c", "xmin": "over clearance c",
+            "multipliers": "dimensionless (Floquet multipliers)" if kind == "cycles"
+            else "per tau (eigenvalues of the Jacobian)",
+            "trivial_error": "dimensionless", "ds": "arclength of the continuation", "tangent_lam": "dimensionless"}
+
+
+def branch_meta(params: Params, problem: str, spec: SystemSpec | None = None) -> dict[str, Any]:
+    """What a GFB branch file records about its system (``Branch.meta``; JSON-able).
+
+    Keys: ``model``, ``problem`` (``"unbalance_response"``, ``"self_excited"`` or ``"equilibria"``) and its
+    ``problem_description``, ``gfbjax_version``, ``continuation_parameter``, ``conventions``
+    (:data:`CONVENTIONS`), ``params`` (every field of ``params``: the dimensionless groups as floats, grid, rotor
+    kind), ``grid`` (``Nx``, ``Nz``, ``n_theta``, ``n_pressure``), ``state_layout`` (``n`` states, ``oscillator``,
+    ``slices`` as [start, stop) per part, ``rotor_states`` names), ``component_names`` and, with ``spec``:
+    ``spec`` (``spec.to_dict()``, SI), ``t_star_s`` [s], ``c_m`` [m] and ``rpm_per_omega_bar``
+    (``spec.rpm(1.0)``: rpm = Omega_bar * rpm_per_omega_bar).
+
+    Raises ParameterError when ``spec`` is not the system of ``params`` (a field of ``spec.nondim()`` differs),
+    so that a file never names a system it was not computed for.
+    """
+    from .. import __version__
+
+    if problem not in _PROBLEMS:
+        raise ValueError(f"problem must be one of {sorted(_PROBLEMS)}, got {problem!r}")
+    oscillator = problem == "unbalance_response"
+    groups = {f.name: _plain(getattr(params, f.name)) for f in dataclasses.fields(params)}
+    if spec is not None:
+        if not isinstance(spec, SystemSpec):
+            raise TypeError(f"spec must be a SystemSpec, got {type(spec).__name__}")
+        own = {f.name: _plain(getattr(spec.nondim(), f.name)) for f in dataclasses.fields(params)}
+        for name, v in own.items():
+            w = groups[name]
+            same = (math.isclose(v, w, rel_tol=1e-12, abs_tol=1e-300)
+                    if isinstance(v, float) and isinstance(w, float) else v == w)
+            if not same:
+                raise ParameterError(f"spec does not describe params: {name} = {v!r} from spec.nondim(), "
+                                     f"{w!r} in params")
+    lay = layout(params, oscillator)
+    npos = len(rotor_components(params, oscillator))
+    rotor_states = list(JOURNAL_AND_DISC[:npos]) + [f"{s}'" for s in JOURNAL_AND_DISC[:npos]]
+    meta: dict[str, Any] = {
+        "model": "gfbjax GFB-rotor (rotor on two identical gas foil bearings)",
+        "problem": problem, "problem_description": _PROBLEMS[problem], "gfbjax_version": __version__,
+        "continuation_parameter": "Omega_bar",
+        "conventions": dict(CONVENTIONS),
+        "params": groups,
+        "grid": {"Nx": int(params.Nx), "Nz": int(params.Nz), "n_theta": int(lay.grid.n_theta),
+                 "n_pressure": int(lay.grid.n_pressure)},
+        "state_layout": {"n": int(lay.n), "oscillator": oscillator,
+                         "slices": {k: [int(s.start), int(s.stop)] for k, s in lay.slices.items()
+                                    if s.stop > s.start},
+                         "rotor_states": rotor_states},
+        "component_names": list(JOURNAL_AND_DISC[:npos]),
+    }
+    if spec is not None:
+        meta.update({"spec": spec.to_dict(), "t_star_s": spec.t_star, "c_m": spec.c,
+                     "rpm_per_omega_bar": spec.rpm(1.0)})
+    return meta
+
+
+def describe_branch(branch: cont.Branch, meta: dict[str, Any]) -> cont.Branch:
+    """Attach :func:`branch_meta` to ``branch`` (its ``meta``, ``component_names`` and ``units``); returns it."""
+    branch.meta = meta
+    branch.component_names = list(meta["component_names"])
+    branch.units = branch_units(branch.kind)
+    return branch
+
+
+def _plain(v: Any) -> Any:
+    """A Params / spec field as a JSON value: str, int and bool as they are, numbers and 0-d arrays as float,
+    arrays as nested lists of floats."""
+    if isinstance(v, (str, bool, int)) or v is None:
+        return v
+    a = np.asarray(v, dtype=float)
+    return float(a) if a.ndim == 0 else a.tolist()

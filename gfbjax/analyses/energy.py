@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from ..cont import collocation as col
+from .. import cont
 from ..model import layout
 from ..model.foil import foil_rates
 from ..model.reynolds import bearing_force, gauge, mean_gauge_pressure
@@ -74,14 +74,14 @@ def power(s: Array, omega: Array, params: Params) -> Array:
 
 def _period_integrals(xm: Array, xi: Array, mesh: Array, T: Array, omega: Array, params: Params) -> Array:
     m = xi.shape[1] + 1
-    sch = col.Scheme(m)
+    sch = cont.Scheme(m)
     U = jnp.concatenate([xm[:-1, None], xi, xm[1:, None]], axis=1)
     X = jnp.einsum("ki,jin->jkn", sch.l, U)  # states at the Gauss points
     pw = jax.vmap(jax.vmap(lambda x: power(x, omega, params)))(X)  # (N, m, 3)
     return T * jnp.einsum("j,k,jka->a", jnp.diff(mesh), sch.weights, pw)
 
 
-def orbit_energy(orbit: col.Orbit, params: Params) -> CycleEnergy:
+def orbit_energy(orbit: cont.Orbit, params: Params) -> CycleEnergy:
     """Works of one collocation orbit (``orbit.lam`` = Omega_bar, ``orbit.T`` the period in t*); pure JAX:
     jit-, grad- and vmap-safe in ``orbit`` and ``params``."""
     W_fu, W_B, W_cf = _period_integrals(orbit.xm, orbit.xi, orbit.mesh, orbit.T, orbit.lam, params)

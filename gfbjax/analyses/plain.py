@@ -39,7 +39,9 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .. import cont
 from ..model import Grid, bearing_force, plain_bearing_rates
+from .. import limits
 from ..params import ParameterError
 
 __all__ = [
@@ -50,52 +52,25 @@ __all__ = [
     "whirl_force",
 ]
 
-# The steady Newton solve uses a dense Jacobian of size (Nx Nz)^2: cap the problem size.
-_MAX_UNKNOWNS = 6144
-
-
-# -- input checks -----------------------------------------------------------------------------------------
+# -- input checks (ranges of gfbjax.limits; skipped for tracers under jit/vmap) ---------------------------
 
 def _is_concrete(v: Any) -> bool:
     """True for Python/NumPy scalars and concrete arrays (checks are skipped for tracers under jit/vmap)."""
-    return not isinstance(v, jax.core.Tracer)
+    return not limits.is_traced(v)
 
 
 def _check_real(name: str, value: Any, lo: float | None, hi: float | None, *, lo_open: bool = False,
                 hi_open: bool = False, what: str = "") -> None:
-    if not _is_concrete(value):
-        return
-    if isinstance(value, bool):
-        raise ParameterError(f"{name} must be a real number, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
-    if arr.ndim != 0:
-        raise ParameterError(f"{name} must be a scalar, got shape {arr.shape} (use jax.vmap to batch)")
-    v = float(arr)
-    if not math.isfinite(v):
-        raise ParameterError(f"{name} must be finite, got {value!r}")
-    bad = (lo is not None and (v <= lo if lo_open else v < lo)) or (
-        hi is not None and (v >= hi if hi_open else v > hi))
-    if bad:
-        left, right = ("(" if lo_open else "["), (")" if hi_open else "]")
-        lo_s = "-inf" if lo is None else f"{lo:g}"
-        hi_s = "inf" if hi is None else f"{hi:g}"
-        extra = f" ({what})" if what else ""
-        raise ParameterError(f"{name} = {v!r} is outside the allowed range {left}{lo_s}, {hi_s}{right}{extra}")
+    """A finite real scalar in the given range (an ad-hoc :class:`gfbjax.limits.Range`: these ranges belong to
+    the plain-bearing functions alone)."""
+    limits.Range(name, lo, hi, lo_open=lo_open, hi_open=hi_open, what=what).check(value)
 
 
 def _check_grid(Nx: Any, Nz: Any) -> None:
-    for name, v, lo, hi, why in (("Nx", Nx, 8, 1024, "circumferential intervals over 2 pi"),
-                                  ("Nz", Nz, 2, 256, "axial intervals over the half length")):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-            raise ParameterError(f"{name} must be an integer, got {v!r}")
-        if not lo <= int(v) <= hi:
-            raise ParameterError(f"{name} = {v} is outside the allowed range [{lo}, {hi}] ({why})")
-    if int(Nx) * int(Nz) > _MAX_UNKNOWNS:
-        raise ParameterError(f"Nx * Nz = {int(Nx) * int(Nz)} is outside the allowed range [16, {_MAX_UNKNOWNS}] "
-                             "(the dense Newton Jacobian would not fit)")
+    """The periodic grid: :data:`gfbjax.limits.PLAIN_NX`, :data:`~gfbjax.limits.NZ` and at most
+    :data:`~gfbjax.limits.MAX_DENSE_UNKNOWNS` unknowns (dense Newton Jacobian)."""
+    nx, nz = limits.PLAIN_NX.check(Nx), limits.NZ.check(Nz)
+    limits.PLAIN_UNKNOWNS.check(nx * nz)
 
 
 def _check_position(x: Any, y: Any) -> None:
@@ -149,6 +124,13 @@ def _force_rt(F: Array, x: Array, y: Array) -> Array:
     return jnp.stack([F[0] * cr + F[1] * sr, -F[0] * sr + F[1] * cr])
 
 
+def _step_test(xtol: float, max_iter: int) -> cont.NewtonSettings:
+    """Newton settings of the plain bearing's solves: converged on a full step below ``xtol`` (no residual check,
+    no divergence test: the damping keeps the pressure positive and the iteration monotone)."""
+    return cont.NewtonSettings(tol=0.0, atol_step=xtol, rtol_step=0.0, max_iter=max_iter, divergence=math.inf,
+                               verify_residual=False)
+
+
 @eqx.filter_jit
 def _steady(Lambda: Array, x: Array, y: Array, kappa: Array, grid: Grid, gumbel: bool, xtol: float,
             max_iter: int) -> PlainBearingResult:
@@ -158,25 +140,17 @@ def _steady(Lambda: Array, x: Array, y: Array, kappa: Array, grid: Grid, gumbel:
     def F(p: Array) -> Array:
         return plain_bearing_rates(p.reshape(shape), x, y, zero, zero, Lambda, kappa, grid).reshape(-1)
 
-    def body(carry):
-        p, k, _, _ = carry
+    def linearise(p):
         r = F(p)
-        J = jax.jacfwd(F)(p)
-        dp = jnp.linalg.solve(J, -r)
-        # damping that keeps the pressure positive (a gas film cannot carry p <= 0)
-        ratio = jnp.where(dp < 0.0, p / jnp.where(dp < 0.0, -dp, 1.0), jnp.inf)
-        t = jnp.minimum(1.0, 0.9 * jnp.min(ratio))
-        step = jnp.max(jnp.abs(dp))
-        done = (t == 1.0) & (step < xtol)
-        return p + t * dp, k + 1, step, done
+        return jnp.max(jnp.abs(r)), jnp.linalg.solve(jax.jacfwd(F)(p), -r), None
 
-    def cond(carry):
-        p, k, step, done = carry
-        return (~done) & (k < max_iter) & ~jnp.isnan(step)
+    def damping(p, dp, _):  # keeps the pressure positive (a gas film cannot carry p <= 0)
+        ratio = jnp.where(dp < 0.0, p / jnp.where(dp < 0.0, -dp, 1.0), jnp.inf)
+        return jnp.minimum(1.0, 0.9 * jnp.min(ratio))
 
     p0 = jnp.ones(grid.n_pressure, dtype=jnp.result_type(Lambda, x, y, float))
-    init = (p0, jnp.asarray(0), jnp.asarray(jnp.inf, p0.dtype), jnp.asarray(False))
-    p, k, step, done = jax.lax.while_loop(cond, body, init)
+    sol = cont.newton_solve(linearise, p0, _step_test(xtol, max_iter), damping=damping)
+    p, k, done = sol.x, sol.iterations, sol.converged
     res = jnp.max(jnp.abs(F(p)))
     P = p.reshape(shape)
     theta = grid.theta(0.0)
@@ -220,8 +194,7 @@ def plain_bearing_steady(Lambda: float | Array, x: float | Array, y: float | Arr
     _check_real("kappa", kappa, 0.0, 100.0, lo_open=True, what="R/L")
     _check_grid(Nx, Nz)
     _check_real("xtol", xtol, 0.0, 1e-3, lo_open=True)
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or not 1 <= max_iter <= 1000:
-        raise ParameterError(f"max_iter = {max_iter!r} is outside the allowed range [1, 1000]")
+    limits.Range("max_iter", 1, 1000, integer=True).check(max_iter)
     f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
     return _steady(f(Lambda), f(x), f(y), f(kappa), Grid(int(Nx), int(Nz), periodic=True), bool(gumbel),
                    float(xtol), int(max_iter))
@@ -327,24 +300,20 @@ def _whirl(Lambda: Array, nu: Array, eps: Array, kappa: Array, grid: Grid, n_per
         t = k * dt
         J = jax.jacfwd(rhs, argnums=1)(t, p)
         lu = jax.scipy.linalg.lu_factor(eye - dt * _G * J)
+        stage_newton = _step_test(newton_tol, max_newton)
         ks = []
         for i in range(3):
             ti = t + _SDIRK_C[i] * dt
             base = p + dt * sum((_SDIRK_A[i][j] * ks[j] for j in range(i)), jnp.zeros_like(p))
 
-            def newton(c):
-                Y, it, _ = c
+            def stage(Y, ti=ti, base=base):  # simplified Newton: the step's LU for every iteration
                 G = Y - base - dt * _G * rhs(ti, Y)
-                dY = jax.scipy.linalg.lu_solve(lu, -G)
-                return Y + dY, it + 1, jnp.max(jnp.abs(dY))
+                return jnp.max(jnp.abs(G)), jax.scipy.linalg.lu_solve(lu, -G), None
 
-            def go(c):
-                _, it, d = c
-                return (it < max_newton) & (d > newton_tol)
-
-            Y, it, d = jax.lax.while_loop(go, newton, (p, jnp.asarray(0), jnp.asarray(jnp.inf, p.dtype)))
-            ok = ok & (d <= newton_tol) & jnp.all(Y > 0.0)
-            itmax = jnp.maximum(itmax, it)
+            sol = cont.newton_solve(stage, p, stage_newton)
+            Y = sol.x
+            ok = ok & sol.converged & jnp.all(Y > 0.0)
+            itmax = jnp.maximum(itmax, sol.iterations)
             ks.append((Y - base) / (dt * _G))
         p_new = p + dt * sum((_SDIRK_A[2][j] * ks[j] for j in range(3)), jnp.zeros_like(p))
         return (p_new, ok, itmax), rotating(t + dt, p_new)
@@ -412,8 +381,7 @@ def whirl_force(Lambda: float | Array, nu: float | Array, eps: float | Array, ka
     _check_grid(Nx, Nz)
     for name, v, lo, hi in (("n_periods", n_periods, 1, 1000), ("steps_per_period", steps_per_period, 8, 10000),
                             ("max_newton", max_newton, 1, 100)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= int(v) <= hi:
-            raise ParameterError(f"{name} = {v!r} is outside the allowed range [{lo}, {hi}] (integer)")
+        limits.Range(name, lo, hi, integer=True).check(v)
     _check_real("newton_tol", newton_tol, 0.0, 1e-3, lo_open=True)
     f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
     return _whirl(f(Lambda), f(nu), f(eps), f(kappa), Grid(int(Nx), int(Nz), periodic=True), int(n_periods),

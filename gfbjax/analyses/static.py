@@ -24,27 +24,16 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .. import cont
 from ..model import balanced_vector_field, film, layout
+from .. import limits
 from ..params import ParameterError, Params, SystemSpec
 
-__all__ = ["StaticResult", "NewtonResult", "newton_solve", "solve_equilibrium", "load_displacement",
+__all__ = ["StaticResult", "newton_solve", "solve_equilibrium", "load_displacement",
            "with_load"]
 
 # Backtracking fractions of the Newton step, tried together (one vmapped evaluation).
 _STEP_FRACTIONS = jnp.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64])
-
-
-class NewtonResult(eqx.Module):
-    """Outcome of :func:`newton_solve` (arrays, so that it can be vmapped).
-
-    ``status``: 0 converged, 1 reached ``max_iter``, 2 the film closed or the residual became non-finite."""
-
-    x: Array
-    residual: Array
-    step: Array
-    iterations: Array
-    status: Array
-    h_min: Array
 
 
 def with_load(params: Params, w: float | Array, scale: float | Array = 1.0) -> Params:
@@ -65,49 +54,47 @@ def _h_min(s: Array, params: Params) -> Array:
     return jnp.min(film(s, params))
 
 
+# Converged when a full step is below xtol (tol=inf: the last evaluation only reports the residual at the returned
+# state); no divergence test (the damping keeps the iteration monotone).
+def _newton_settings(xtol: float, max_iter: int) -> cont.NewtonSettings:
+    return cont.NewtonSettings(tol=math.inf, atol_step=xtol, rtol_step=0.0, max_iter=max_iter,
+                               divergence=math.inf)
+
+
 @eqx.filter_jit
 def newton_solve(s0: Array, omega: Array, params: Params, *, xtol: float = 1e-10, max_iter: int = 25
-                 ) -> NewtonResult:
-    """Damped Newton on the balanced vector field ``f(s, omega) = 0`` from ``s0``.
+                 ) -> cont.NewtonSolution:
+    """Damped Newton on the balanced vector field ``f(s, omega) = 0`` from ``s0``: the one corrector of
+    :mod:`gfbjax.cont` with this damping.
 
     Each iteration solves ``J ds = -f`` with ``J = jax.jacfwd(f)`` and takes the largest step fraction t in
     ``{1, 1/2, ..., 1/64}`` that keeps the film open and passes Deuflhard's affine-invariant monotonicity test
     ``|J^-1 f(s + t ds)| <= (1 - t/4) |ds|`` (the simplified Newton correction shrinks; one LU serves all trial
     steps).  The test is blind to the very different scales of pressure, foil and rotor residuals, where a plain
-    ``|f|`` line search crawls.  Converged when a full step has ``|ds|_inf < xtol``.  Pure and jit-compiled:
-    ``jax.vmap`` batches it over guesses, speeds or parameters.
+    ``|f|`` line search crawls.  Converged when a full step has ``|ds|_inf <= xtol``; ``NONFINITE`` when no trial
+    step keeps the film open and finite.  Pure and jit-compiled: ``jax.vmap`` batches it over guesses, speeds or
+    parameters.  Returns a :class:`gfbjax.cont.NewtonSolution` (``x`` the state).
     """
     f = lambda s: balanced_vector_field(s, omega, params)  # noqa: E731
+
+    def linearise(s):
+        r = f(s)
+        lu = jax.scipy.linalg.lu_factor(jax.jacfwd(f)(s))
+        return jnp.max(jnp.abs(r)), jax.scipy.linalg.lu_solve(lu, -r), lu
 
     def trial(s, ds, t, lu):
         s1 = s + t * ds
         r1 = f(s1)
         ok = jnp.all(jnp.isfinite(r1)) & (_h_min(s1, params) > 0.0)
-        dsb = jax.scipy.linalg.lu_solve(lu, -r1)
-        return s1, jnp.where(ok, jnp.linalg.norm(dsb), jnp.inf), jnp.linalg.norm(r1)
+        return jnp.where(ok, jnp.linalg.norm(jax.scipy.linalg.lu_solve(lu, -r1)), jnp.inf)
 
-    def body(carry):
-        s, _, _, k, _ = carry
-        r = f(s)
-        lu = jax.scipy.linalg.lu_factor(jax.jacfwd(f)(s))
-        ds = jax.scipy.linalg.lu_solve(lu, -r)
-        nds = jnp.linalg.norm(ds)
-        s_try, n_bar, r_norm = jax.vmap(trial, in_axes=(None, None, 0, None))(s, ds, _STEP_FRACTIONS, lu)
-        good = n_bar <= (1.0 - 0.25 * _STEP_FRACTIONS) * nds
+    def damping(s, ds, lu):
+        n_bar = jax.vmap(trial, in_axes=(None, None, 0, None))(s, ds, _STEP_FRACTIONS, lu)
+        good = n_bar <= (1.0 - 0.25 * _STEP_FRACTIONS) * jnp.linalg.norm(ds)
         idx = jnp.where(jnp.any(good), jnp.argmax(good), len(_STEP_FRACTIONS) - 1)
-        finite = jnp.isfinite(n_bar[idx])
-        s_new = jnp.where(finite, s_try[idx], s)
-        step = jnp.max(jnp.abs(ds)) * _STEP_FRACTIONS[idx]
-        status = jnp.where(finite, jnp.where((idx == 0) & (step < xtol), 0, 1), 2)
-        return s_new, r_norm[idx], step, k + 1, status
+        return jnp.where(jnp.isfinite(n_bar[idx]), _STEP_FRACTIONS[idx], 0.0)
 
-    def cond(carry):
-        _, _, _, k, status = carry
-        return (status == 1) & (k < max_iter)
-
-    init = (s0, jnp.linalg.norm(f(s0)), jnp.asarray(jnp.inf), jnp.asarray(0), jnp.asarray(1))
-    s, res, step, k, status = jax.lax.while_loop(cond, body, init)
-    return NewtonResult(s, res, step, k, status, _h_min(s, params))
+    return cont.newton_solve(linearise, s0, _newton_settings(xtol, max_iter), damping=damping)
 
 
 @dataclass
@@ -132,7 +119,7 @@ class StaticResult:
         pressure: p/p0 on all nodes, shape (len(theta), len(z)).
         foil: strip deflection q/c at the nodes (0 at the clamped ends).
         eigenvalues: eigenvalues of the Jacobian (per unit tau), sorted by decreasing real part.
-        residual: 2-norm of f at the solution; iterations: Newton iterations in total.
+        residual: max-norm of f at the solution; iterations: Newton iterations in total.
     """
 
     omega: float
@@ -197,11 +184,16 @@ class StaticResult:
         return d
 
 
-def _check_inputs(omega: float, w: float) -> None:
-    if not (isinstance(omega, (int, float)) and math.isfinite(omega) and 0.0 < omega <= 50.0):
-        raise ParameterError(f"omega = {omega!r} is outside the allowed range (0, 50] (dimensionless speed)")
-    if not (isinstance(w, (int, float)) and math.isfinite(w) and 0.0 <= w <= 20.0):
-        raise ParameterError(f"w = {w!r} is outside the allowed range [0, 20] (specific load W/(p0 L D))")
+def _check_inputs(params: Params, omega: Any, w: Any, guess_w: Any = None) -> tuple[float, float, float | None]:
+    """Check the system (:meth:`Params.check`), the speed (:data:`gfbjax.limits.SPEED`) and the loads
+    (:data:`gfbjax.limits.LOAD_W`) before any solve; returns the speed and loads as Python floats (NumPy and
+    concrete JAX scalars are accepted)."""
+    params.check()
+    omega = limits.SPEED.check(omega, "omega")
+    w = limits.LOAD_W.check(w, "w")
+    if guess_w is not None:
+        guess_w = limits.LOAD_W.check(guess_w, "guess_w")
+    return omega, w, guess_w
 
 
 def _build_result(s: Array, omega: float, w: float, params: Params, outcome: str, message: str,
@@ -242,7 +234,7 @@ def _ramp(s: Array, params_at: Callable[[float], Params], omega: Array, xtol: fl
                 guess = cand
         res = newton_solve(guess, omega, params_at(target), xtol=xtol)
         iters += int(res.iterations)
-        if int(res.status) == 0:
+        if res.converged:
             s_prev, t_prev = s, t
             s, t, res_norm = res.x, target, float(res.residual)
             dt = 2.0 * dt
@@ -272,10 +264,8 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         A :class:`StaticResult`; never NaN: a film that closes before the load is carried gives
         ``outcome == "contact"`` and the last converged (partially loaded) state.
     """
-    _check_inputs(omega, w)
+    omega, w, guess_w = _check_inputs(params, omega, w, guess_w)
     params = _as_arrays(params)
-    if guess_w is not None:
-        _check_inputs(omega, guess_w)
     omega_a = jnp.asarray(float(omega))
     iters = 0
     if guess is not None:

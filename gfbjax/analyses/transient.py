@@ -20,7 +20,7 @@ from the equilibrium, 2-core CPU, one BLAS thread): Kvaerno5 with the coloured J
 second at rtol 1e-5 (end-state error 1.1e-6 against an rtol-1e-9 reference) and 0.64 rev/s at rtol 1e-6 (1.3e-7);
 diffrax' dense VeryChord Jacobian 0.33 rev/s; scipy ``solve_ivp`` Radau with the exact jitted Jacobian 0.64 rev/s
 (2.7e-7), BDF 2.28 rev/s (5.2e-6; it reuses Jacobians over many steps).  Multi-threaded BLAS on a small shared
-machine made these small LUs 50-100x slower, hence ``OPENBLAS_NUM_THREADS=1`` by default (``gfbjax/__init__``).
+machine made these small LUs 50-100x slower, hence ``OPENBLAS_NUM_THREADS=1`` by default (``gfbjax._process``).
 
 Long runs are integrated in chunks of ``chunk_revs`` revolutions: one compiled ``diffeqsolve`` per
 (grid, settings), reused by every chunk, a progress bar advanced per chunk, and everything computed up to a
@@ -52,8 +52,9 @@ import lineax as lx
 import optimistix as optx
 from jax import Array
 
-from ..cont.sparsity import color_pattern
+from ..cont import Coloring, color_pattern, dense_jacobian
 from ..model import film, layout, runup_vector_field
+from .. import limits
 from ..params import ParameterError, Params
 
 __all__ = [
@@ -63,6 +64,9 @@ __all__ = [
     "simulate",
     "run_up",
     "runup_acceleration",
+    "RunPlan",
+    "check_simulate",
+    "check_run_up",
     "default_initial_state",
     "as_traced",
     "outputs_of",
@@ -75,6 +79,15 @@ SOLVERS: dict[str, Callable[[], dfx.AbstractSolver]] = {
 }
 
 OUTCOMES = ("completed", "rub", "failed")
+
+
+# Ranges of the TransientSettings fields (only this class uses them; the shared ranges are in gfbjax.limits).
+_SETTINGS_RANGES = (
+    limits.Range("rtol", 1e-13, 1e-1), limits.Range("atol", 1e-15, 1e-1), limits.Range("chunk_revs", 1e-3, 1e5),
+    limits.Range("h_rub", 0.0, 0.5), limits.Range("pcoeff", 0.0, 1.0), limits.Range("icoeff", 0.0, 1.0),
+    limits.Range("samples_per_rev", 4, 4096, integer=True),
+    limits.Range("max_steps_per_chunk", 10, 10**8, integer=True),
+)
 
 
 @dataclass(frozen=True)
@@ -113,15 +126,8 @@ class TransientSettings:
             raise ParameterError(f"solver = {self.solver!r} is not one of {sorted(SOLVERS)}")
         if self.jacobian not in ("colored", "dense"):
             raise ParameterError(f"jacobian = {self.jacobian!r} is not one of ['colored', 'dense']")
-        for name, lo, hi in (("rtol", 1e-13, 1e-1), ("atol", 1e-15, 1e-1), ("chunk_revs", 1e-3, 1e5),
-                             ("h_rub", 0.0, 0.5), ("pcoeff", 0.0, 1.0), ("icoeff", 0.0, 1.0)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not lo <= v <= hi:
-                raise ParameterError(f"{name} = {v!r} is outside the allowed range [{lo:g}, {hi:g}]")
-        for name, lo, hi in (("samples_per_rev", 4, 4096), ("max_steps_per_chunk", 10, 10**8)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-                raise ParameterError(f"{name} = {v!r} must be an integer in [{lo}, {hi}]")
+        for rng in _SETTINGS_RANGES:  # NumPy numbers are stored as Python numbers
+            object.__setattr__(self, rng.name, rng.check(getattr(self, rng.name)))
 
     def replace(self, **changes: Any) -> "TransientSettings":
         return dataclasses.replace(self, **changes)
@@ -294,80 +300,40 @@ def default_initial_state(params: Params, omega: float) -> tuple[np.ndarray, str
 def runup_acceleration(omega_start: float, omega_end: float, revolutions: float) -> float:
     """Constant angular acceleration ``a_bar`` [per tau^2] that takes ``revolutions`` revolutions to go from
     ``omega_start`` to ``omega_end``: ``(omega_end^2 - omega_start^2) / (4 pi revolutions)``."""
-    if not revolutions > 0:
-        raise ParameterError(f"revolutions = {revolutions!r} must be > 0")
+    revolutions = limits.REVOLUTIONS.check(revolutions)
     return (omega_end**2 - omega_start**2) / (4.0 * math.pi * revolutions)
 
 
 # -- sparse (coloured) Jacobian for the implicit stages -------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class JacobianColoring:
-    """Column colouring of the GFB-rotor Jacobian (computed once per grid by :func:`jacobian_coloring`).
-
-    The Jacobian of the stage equations of an implicit Runge-Kutta method, ``I - gamma dt J``, has the sparsity of
-    ``J`` plus the diagonal.  ``J`` is sparse except for the rows of the journal accelerations (the bearing force
-    integrates every pressure): those ``dense_rows`` are taken by reverse mode (one VJP each); the remaining
-    pattern is compressed by a greedy column colouring (two columns share a colour when no row outside
-    ``dense_rows`` holds both), one forward-mode JVP per colour.  Reference grid Nx=40, Nz=6 (281 states): 25 JVPs
-    + 2 VJPs instead of 281 JVPs.
-    """
-
-    n: int
-    color: tuple[int, ...]          # colour of each column
-    n_colors: int
-    rows: tuple[int, ...]           # structural non-zeros (row, col); dense-row entries are overwritten by VJPs
-    cols: tuple[int, ...]
-    dense_rows: tuple[int, ...]
-
-    def seeds(self) -> np.ndarray:
-        S = np.zeros((self.n, self.n_colors))
-        S[np.arange(self.n), np.asarray(self.color)] = 1.0
-        return S
-
-
 @functools.lru_cache(maxsize=16)
-def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float) -> JacobianColoring:
+def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float) -> Coloring:
     from ..model.pattern import jacobian_sparsity
     from ..params import reference_system
 
     params = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width).nondim()
-    pat = jacobian_sparsity(params, oscillator=False)
-    n = pat.shape[0]
-    c = color_pattern(pat)
-    return JacobianColoring(n=n, color=tuple(int(v) for v in c.color), n_colors=c.n_colors,
-                            rows=tuple(int(v) for v in c.rows), cols=tuple(int(v) for v in c.cols),
-                            dense_rows=tuple(int(v) for v in c.dense_rows))
+    return color_pattern(jacobian_sparsity(params, oscillator=False))
 
 
-def jacobian_coloring(params: Params) -> JacobianColoring:
-    """The :class:`JacobianColoring` of this system's grid and rotor (cached per grid)."""
+def jacobian_coloring(params: Params) -> Coloring:
+    """The column colouring (:class:`gfbjax.cont.Coloring`) of this system's Jacobian, cached per grid and rotor.
+
+    The Jacobian of the stage equations of an implicit Runge-Kutta method, ``I - gamma dt J``, has the sparsity of
+    ``J`` plus the diagonal.  ``J`` is sparse except for the rows of the journal accelerations (the bearing force
+    integrates every pressure): those dense rows are taken by reverse mode (one VJP each), the rest by one
+    forward-mode JVP per colour.  Reference grid Nx=40, Nz=6 (281 states): 25 JVPs + 2 VJPs instead of 281 JVPs."""
     return _coloring_cached(params.Nx, params.Nz, params.rotor, float(params.gumbel_width))
-
-
-def colored_jacobian(fn: Callable[[Array], Array], y: Array, col: JacobianColoring) -> Array:
-    """Dense Jacobian of ``fn`` at ``y`` from ``n_colors`` JVPs and ``len(dense_rows)`` VJPs."""
-    S = jnp.asarray(col.seeds(), dtype=y.dtype)
-    JS = jax.vmap(lambda v: jax.jvp(fn, (y,), (v,))[1], in_axes=1, out_axes=1)(S)
-    rows, cols = np.asarray(col.rows, dtype=int), np.asarray(col.cols, dtype=int)
-    J = jnp.zeros((col.n, col.n), y.dtype).at[rows, cols].set(JS[rows, np.asarray(col.color)[cols]])
-    if col.dense_rows:
-        dr = np.asarray(col.dense_rows, dtype=int)
-        _, vjp = jax.vjp(fn, y)
-        E = jnp.zeros((dr.size, col.n), y.dtype).at[np.arange(dr.size), dr].set(1.0)
-        J = J.at[dr].set(jax.vmap(lambda e: vjp(e)[0])(E))
-    return J
 
 
 class ColoredChord(optx.AbstractRootFinder):
     """diffrax' ``VeryChord`` (one linearisation per Runge-Kutta step, reused by every stage) with the Jacobian
-    of the stage equations assembled from a :class:`JacobianColoring` and factorised by lineax' dense ``LU``.
+    of the stage equations assembled from a :class:`gfbjax.cont.Coloring` and factorised by lineax' dense ``LU``.
     The chord iterations, convergence test and divergence test are VeryChord's own."""
 
     rtol: float
     atol: float
-    coloring: JacobianColoring = eqx.field(static=True)
+    coloring: Coloring = eqx.field(static=True)
     norm: Callable = optx.max_norm
     kappa: float = 1e-2
 
@@ -381,7 +347,7 @@ class ColoredChord(optx.AbstractRootFinder):
 
         if "init_state" in options:
             return options["init_state"]
-        J = colored_jacobian(lambda z: fn(z, args)[0], y, self.coloring)
+        J = dense_jacobian(lambda z: fn(z, args)[0], y, self.coloring)
         op = lx.MatrixLinearOperator(jax.lax.stop_gradient(J))
         lin_state = lx.LU().init(op, options={})
         return _VeryChordState(linear_state=(op, lin_state), diff=jnp.full(y.shape, jnp.inf, y.dtype),
@@ -407,7 +373,7 @@ def _vf(t, y, args):
 
 
 @functools.lru_cache(maxsize=16)
-def _chunk_solver(solver: str, max_steps: int, save_states: bool, coloring: JacobianColoring | None = None):
+def _chunk_solver(solver: str, max_steps: int, save_states: bool, coloring: Coloring | None = None):
     """A jitted ``chunk(y0, t0, t1, ts, dt0, params, omega0, accel, h_rub, ctrl)`` for these static settings;
     ``ctrl = (rtol, atol, pcoeff, icoeff)`` are traced, so changing a tolerance does not recompile.
 
@@ -613,10 +579,90 @@ def _result_name(code: int) -> str:
 # -- public entry points -----------------------------------------------------------------------------------------
 
 
-def _check_speed(name: str, v: float) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not 0.0 < v <= 50.0:
-        raise ParameterError(f"{name} = {v!r} is outside the allowed range (0, 50] (dimensionless speed)")
-    return float(v)
+@dataclass(frozen=True)
+class RunPlan:
+    """A checked transient run: start speed ``omega0``, acceleration ``accel`` (0 at constant speed), length
+    ``tau_end`` and sample spacing ``dtau`` (dimensionless)."""
+
+    omega0: float
+    accel: float
+    tau_end: float
+    dtau: float
+
+
+def _check_history(params: Params, plan: RunPlan, settings: TransientSettings, what: str) -> None:
+    """Refuse a run whose saved samples would not fit in memory (:func:`gfbjax.limits.check_history`): per sample
+    the time, speed, h_min and rotor states, and the full state with ``save_states``."""
+    lay = layout(params)
+    per_sample = 8 * (lay.n_rotor + 3 + (lay.n_core if settings.save_states else 0))
+    limits.check_history(plan.tau_end / plan.dtau + 1, per_sample, what)
+
+
+def check_simulate(params: Params, omega: Any, *, revolutions: Any = None, tau_end: Any = None,
+                   settings: TransientSettings | None = None) -> RunPlan:
+    """Check the inputs of :func:`simulate` before any computation and return its :class:`RunPlan`.
+
+    ``params`` by :meth:`Params.check`; ``omega`` in :data:`gfbjax.limits.SPEED`; ``revolutions`` (default 100) in
+    :data:`~gfbjax.limits.REVOLUTIONS`, or ``tau_end`` > 0; the samples within
+    :data:`~gfbjax.limits.MAX_HISTORY_BYTES`.
+    """
+    settings = settings or TransientSettings()
+    params.check()
+    omega = limits.SPEED.check(omega, "omega")
+    period = 2 * math.pi / omega
+    if tau_end is None:
+        revolutions = limits.REVOLUTIONS.check(100.0 if revolutions is None else revolutions)
+        tau_end = revolutions * period
+    elif revolutions is not None:
+        raise ParameterError("give either revolutions or tau_end, not both")
+    else:
+        tau_end = limits.Range("tau_end", 0.0, None, lo_open=True).check(tau_end)
+    plan = RunPlan(omega, 0.0, tau_end, period / settings.samples_per_rev)
+    _check_history(params, plan, settings, f"a run of {tau_end / period:.4g} revolutions")
+    return plan
+
+
+def check_run_up(params: Params, omega_start: Any, omega_end: Any, *, accel: Any = None, revolutions: Any = None,
+                 settings: TransientSettings | None = None) -> RunPlan:
+    """Check the inputs of :func:`run_up` before any computation and return its :class:`RunPlan`.
+
+    Speeds in :data:`gfbjax.limits.SPEED` and different; either ``revolutions`` (default 300) in
+    :data:`~gfbjax.limits.REVOLUTIONS`, or ``accel`` with ``|accel|`` in :data:`~gfbjax.limits.ACCEL`, the sign of
+    ``omega_end - omega_start``, and implying at most as many revolutions; the samples within
+    :data:`~gfbjax.limits.MAX_HISTORY_BYTES`.
+    """
+    settings = settings or TransientSettings()
+    params.check()
+    w0 = limits.SPEED.check(omega_start, "omega_start")
+    w1 = limits.SPEED.check(omega_end, "omega_end")
+    if w0 == w1:
+        raise ParameterError("omega_end equals omega_start: use simulate() for a constant-speed run")
+    if accel is None:
+        accel = runup_acceleration(w0, w1, 300.0 if revolutions is None else revolutions)
+    elif revolutions is not None:
+        raise ParameterError("give either accel or revolutions, not both")
+    else:
+        accel = _check_accel(w0, w1, accel)
+    tau_end = (w1 - w0) / accel
+    plan = RunPlan(w0, accel, tau_end, 2 * math.pi / (max(w0, w1) * settings.samples_per_rev))
+    _check_history(params, plan, settings, "the run-up")
+    return plan
+
+
+def _check_accel(w0: float, w1: float, accel: Any) -> float:
+    """A run-up acceleration: non-zero, the sign of ``w1 - w0``, ``|accel|`` in :data:`gfbjax.limits.ACCEL`, and
+    at most :data:`~gfbjax.limits.REVOLUTIONS` revolutions from ``w0`` to ``w1``."""
+    a = limits.check_real("accel", accel)
+    limits.ACCEL.check(abs(a), "|accel|")
+    if (a > 0) != (w1 > w0):
+        direction = "a run-up" if w1 > w0 else "a coast-down"
+        raise ParameterError(f"accel = {a:g} has the wrong sign: Omega_bar {w0:g} -> {w1:g} is {direction}, so "
+                             f"accel must be {'positive' if w1 > w0 else 'negative'}")
+    revs = abs(w1**2 - w0**2) / (4.0 * math.pi * abs(a))
+    if not limits.REVOLUTIONS.contains(revs):
+        raise ParameterError(f"accel = {a:g} per tau^2 implies {revs:.3g} revolutions from Omega_bar {w0:g} to "
+                             f"{w1:g}, outside the allowed range {limits.REVOLUTIONS.interval()} (a larger |accel|)")
+    return a
 
 
 def simulate(params: Params, omega: float, *, revolutions: float | None = None, tau_end: float | None = None,
@@ -628,7 +674,7 @@ def simulate(params: Params, omega: float, *, revolutions: float | None = None, 
     Args:
         params: dimensionless system (``SystemSpec.nondim()``).
         omega: speed Omega_bar in (0, 50].
-        revolutions: length of the run in revolutions (default 100); or give ``tau_end``.
+        revolutions: length of the run in revolutions (default 100), in (0, 1e6]; or give ``tau_end``.
         tau_end: length of the run in dimensionless time tau (instead of ``revolutions``).
         s0: core state to start from; default the static equilibrium of the balanced system at ``omega``.
         settings: :class:`TransientSettings` (default: Kvaerno5, rtol 1e-6, atol 1e-8, 32 samples per rev).
@@ -640,21 +686,12 @@ def simulate(params: Params, omega: float, *, revolutions: float | None = None, 
         every N-th sample lies on the Poincare section (phase 0): :meth:`TransientResult.poincare`.
     """
     settings = settings or TransientSettings()
-    omega = _check_speed("omega", omega)
-    period = 2 * math.pi / omega
-    if tau_end is None:
-        revolutions = 100.0 if revolutions is None else revolutions
-        if not (isinstance(revolutions, (int, float)) and 0 < revolutions <= 1e6):
-            raise ParameterError(f"revolutions = {revolutions!r} is outside the allowed range (0, 1e6]")
-        tau_end = revolutions * period
-    elif revolutions is not None:
-        raise ParameterError("give either revolutions or tau_end, not both")
-    if not (math.isfinite(tau_end) and tau_end > 0):
-        raise ParameterError(f"tau_end = {tau_end!r} must be > 0")
+    plan = check_simulate(params, omega, revolutions=revolutions, tau_end=tau_end, settings=settings)
+    omega = plan.omega0
     note = ""
     if s0 is None:
         s0, note = default_initial_state(params, omega)
-    return _integrate(params, np.asarray(s0), omega, 0.0, tau_end, period / settings.samples_per_rev, settings,
+    return _integrate(params, np.asarray(s0), omega, 0.0, plan.tau_end, plan.dtau, settings,
                       progress, f"Omega={omega:g}", note, callback)
 
 
@@ -669,9 +706,12 @@ def run_up(params: Params, omega_start: float, omega_end: float, *, accel: float
     Args:
         params: dimensionless system.
         omega_start, omega_end: speed range, Omega_bar in (0, 50].
-        accel: angular acceleration ``a_bar`` per tau^2 (its sign must match the direction); or give
-        revolutions: revolutions from start to end (default 300), which set ``accel`` by
+        accel: angular acceleration ``a_bar`` per tau^2 (its sign must match the direction), ``|accel|`` in
+            (0, 100] and implying at most 1e6 revolutions; or give
+        revolutions: revolutions from start to end (default 300), in (0, 1e6], which set ``accel`` by
             :func:`runup_acceleration`.
+
+    Every input is checked before any computation (:func:`check_run_up`), the memory of the saved samples too.
         s0: start state; default the static equilibrium of the balanced system at ``omega_start``.
         settings: :class:`TransientSettings`; samples are uniform in tau, ``samples_per_rev`` per revolution at
             the higher of the two speeds.
@@ -679,22 +719,11 @@ def run_up(params: Params, omega_start: float, omega_end: float, *, accel: float
         callback: called after each chunk.
     """
     settings = settings or TransientSettings()
-    w0 = _check_speed("omega_start", omega_start)
-    w1 = _check_speed("omega_end", omega_end)
-    if w0 == w1:
-        raise ParameterError("omega_end equals omega_start: use simulate() for a constant-speed run")
-    if accel is None:
-        revolutions = 300.0 if revolutions is None else revolutions
-        accel = runup_acceleration(w0, w1, revolutions)
-    elif revolutions is not None:
-        raise ParameterError("give either accel or revolutions, not both")
-    if not (isinstance(accel, (int, float)) and math.isfinite(accel)) or accel == 0 or (accel > 0) != (w1 > w0):
-        raise ParameterError(f"accel = {accel!r} must be non-zero with the sign of omega_end - omega_start")
-    tau_end = (w1 - w0) / accel
-    dtau = 2 * math.pi / (max(w0, w1) * settings.samples_per_rev)
+    plan = check_run_up(params, omega_start, omega_end, accel=accel, revolutions=revolutions, settings=settings)
+    w0 = plan.omega0
     note = ""
     if s0 is None:
         s0, note = default_initial_state(params, w0)
-    kind = "run-up" if w1 > w0 else "coast-down"
-    return _integrate(params, np.asarray(s0), w0, float(accel), tau_end, dtau, settings, progress, kind, note,
-                      callback)
+    kind = "run-up" if plan.accel > 0 else "coast-down"
+    return _integrate(params, np.asarray(s0), w0, plan.accel, plan.tau_end, plan.dtau, settings, progress, kind,
+                      note, callback)

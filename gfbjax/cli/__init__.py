@@ -5,6 +5,11 @@ automatically.  Code elsewhere can add one with :func:`register_command` before 
 
 Exit status: what the command returns (0 success); 2 for invalid input (a one-line message naming the option or
 field, no traceback); 130 when interrupted.
+
+Process settings: :func:`main` is a program's entry point, so it sets what a program may: the XLA:CPU and OpenBLAS
+settings of :func:`gfbjax._process.configure_process` (where not set by the user) and matplotlib's non-interactive
+Agg backend for the figures the commands write (files only, no window).  The library itself (``import gfbjax``,
+the plotting modules) leaves the matplotlib backend alone.
 """
 
 from __future__ import annotations
@@ -60,6 +65,16 @@ def build_parser() -> tuple[argparse.ArgumentParser, list[str]]:
     return parser, warnings
 
 
+def _configure_program() -> None:
+    """The process settings of a command-line run (module docstring)."""
+    import matplotlib
+
+    from .._process import configure_process
+
+    configure_process()
+    matplotlib.use("Agg")  # figures are written to files; no display is needed or opened
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     from ..params import ParameterError
@@ -77,6 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 0 if not argv else 2
     prog = f"{PROG} {args.command}"
+    _configure_program()
     try:
         return int(func(args) or 0)
     except ParameterError as exc:

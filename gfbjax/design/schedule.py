@@ -25,8 +25,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign
+from ..cont import LinearSolver, Outcome
+from .evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign, check_foil
 from .optimizers import minimize_bounded, minimize_log_box, pattern_search
+from .. import limits
 from ..params import ParameterError, Params
 
 __all__ = ["OBJECTIVES", "METHODS", "SpeedOptimum", "Schedule", "optimize_at_speed", "optimized_continuation"]
@@ -76,7 +78,7 @@ def optimize_at_speed(design: FoilDesign, objective: str = "W_cb", method: str =
     ``options`` go to :func:`gfbjax.design.optimizers.pattern_search` or :func:`gfbjax.design.optimizers.minimize_bounded`."""
     _check(objective, method)
     p = design.params
-    x0 = np.array(x0 if x0 is not None else (float(p.alpha_f), float(p.eta)), float)
+    x0 = np.array(check_foil(*(x0 if x0 is not None else (p.alpha_f, p.eta))), float)
     n0, g0 = design.n_solves, design.n_gradients
     rows: list[tuple[float, float, float]] = []
     best: dict[str, Any] = {}
@@ -127,8 +129,10 @@ def optimize_at_speed(design: FoilDesign, objective: str = "W_cb", method: str =
 @dataclass
 class Schedule:
     """Optimised foil schedule along the speed (paper Figs. 16-19): per speed the optimum (alpha_f, eta), the
-    objective, W_cb, max|mu|, stability, the journal's max/min over the cycle and the multipliers; ``reason``
-    says why the march ended; ``bifurcation_free_to`` is the last speed with a stable optimised cycle."""
+    objective, W_cb, max|mu|, stability, the journal's max/min over the cycle and the multipliers; ``outcome``
+    says why the march ended (``REACHED_END``, ``UNSTABLE``: an optimised cycle is unstable, ``NO_SOLUTION``: no
+    cycle converged, ``INTERRUPTED``) and ``message`` gives the details; ``bifurcation_free_to`` is the last
+    speed with a stable optimised cycle."""
 
     objective: str
     method: str
@@ -144,7 +148,8 @@ class Schedule:
     n_solves: int = 0
     n_gradients: int = 0
     seconds: float = 0.0
-    reason: str = ""
+    outcome: Outcome = Outcome.INTERRUPTED
+    message: str = ""
 
     @property
     def bifurcation_free_to(self) -> float | None:
@@ -163,22 +168,25 @@ class Schedule:
                 "multipliers_re": [np.real(a).tolist() for a in self.multipliers],
                 "multipliers_im": [np.imag(a).tolist() for a in self.multipliers],
                 "n_solves": self.n_solves, "n_gradients": self.n_gradients, "seconds": self.seconds,
-                "reason": self.reason, "bifurcation_free_to": self.bifurcation_free_to}
+                "outcome": str(self.outcome), "message": self.message,
+                "bifurcation_free_to": self.bifurcation_free_to}
 
 
 def optimized_continuation(params: Params, omega_start: float, omega_end: float, d_omega: float = 0.025, *,
                            objective: str = "max_mu", method: str = "gradient", x0: tuple[float, float] | None = None,
-                           m: int = 4, N: int = 16, linear_solver: str = "auto", progress: bool = False,
+                           m: int = 4, N: int = 16, linear_solver: LinearSolver | None = None, progress: bool = False,
                            callback: Callable[[SpeedOptimum], Any] | None = None, **options: Any) -> Schedule:
     """March from ``omega_start`` to ``omega_end`` in steps ``d_omega`` (Omega_bar), optimising the foil at each
     speed from the previous optimum and cycle (paper Sect. 3.3 steps a-f).  Ends at ``omega_end``, at the first
     speed whose optimised cycle is unstable (recorded), or where no cycle converges; never loses the finished
     speeds (also on KeyboardInterrupt)."""
     _check(objective, method)
-    if not (isinstance(d_omega, (int, float)) and 0.0 < d_omega <= 1.0):
-        raise ParameterError(f"d_omega = {d_omega!r} is outside the allowed range (0, 1]")
-    if not (0.0 < omega_start < omega_end <= 50.0):
-        raise ParameterError(f"need 0 < omega_start < omega_end <= 50, got {omega_start!r}, {omega_end!r}")
+    d_omega = limits.SPEED_STEP.check(d_omega)
+    omega_start = limits.SPEED.check(omega_start, "omega_start")
+    omega_end = limits.SPEED.check(omega_end, "omega_end")
+    if not omega_start < omega_end:
+        raise ParameterError(f"omega_end = {omega_end:g} must be above omega_start = {omega_start:g} (the march "
+                             "goes up in speed)")
     design = FoilDesign(params, omega_start, m=m, N=N, linear_solver=linear_solver)
     sched = Schedule(objective, method)
     x = x0
@@ -194,7 +202,7 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
             try:
                 opt = optimize_at_speed(design, objective, method, x, **options)
             except CycleNotConverged as e:
-                sched.reason = f"no cycle at Omega_bar = {w:.4f}: {e}"
+                sched.outcome, sched.message = Outcome.NO_SOLUTION, f"no cycle at Omega_bar = {w:.4f}: {e}"
                 break
             ev = opt.evaluation
             x = (opt.alpha_f, opt.eta)
@@ -215,12 +223,13 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
             if callback is not None:
                 callback(opt)
             if not ev.stable:
-                sched.reason = f"the optimised cycle is unstable at Omega_bar = {w:.4f} (max|mu| = {ev.max_mu:.4f})"
+                sched.outcome = Outcome.UNSTABLE
+                sched.message = f"the optimised cycle is unstable at Omega_bar = {w:.4f} (max|mu| = {ev.max_mu:.4f})"
                 break
         else:
-            sched.reason = f"reached omega_end = {omega_end}"
+            sched.outcome, sched.message = Outcome.REACHED_END, f"reached omega_end = {omega_end}"
     except KeyboardInterrupt:
-        sched.reason = "interrupted"
+        sched.outcome, sched.message = Outcome.INTERRUPTED, "interrupted; the finished speeds are kept"
     finally:
         if bar is not None:
             bar.close()

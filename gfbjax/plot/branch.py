@@ -48,15 +48,15 @@ def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:
     """Each special point with the row of the branch arrays it sits on (None when not stored)."""
     rows = []
     for s in branch.special:
-        idx = s.get("index")
+        idx = s.index
         row = None
         if idx is not None and 0 <= int(idx) < len(branch.lam):
             row = int(idx)
-            if not s.get("located", False) or abs(float(branch.lam[row]) - float(s["lam"])) > 1e-9:
+            if not s.located or abs(float(branch.lam[row]) - s.lam) > 1e-9:
                 # not inserted: the nearest point in speed
-                row = int(np.argmin(np.abs(np.asarray(branch.lam) - float(s["lam"]))))
+                row = int(np.argmin(np.abs(np.asarray(branch.lam) - s.lam)))
         elif len(branch.lam):
-            row = int(np.argmin(np.abs(np.asarray(branch.lam) - float(s["lam"]))))
+            row = int(np.argmin(np.abs(np.asarray(branch.lam) - s.lam)))
         rows.append((s, row))
     return rows
 
@@ -93,12 +93,15 @@ def plot_bifurcation(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), colu
         for s, row in rows:
             if row is None:
                 continue
-            mk, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
+            mk, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
+            # an unlocated point is only bracketed between two rows: hollow marker, "?" in the label
+            key = s.type if s.located else f"{s.type} (not located)"
             for arr in (branch.xmax, branch.xmin):
-                ax.plot(float(s["lam"]), float(np.asarray(arr)[row, k]), mk, color=colour, ms=8, mec="k",
-                        label=s["type"] if s["type"] not in seen else None, zorder=5)
-                seen.add(s["type"])
-            ax.annotate(f"{s['type']} {float(s['lam']):.4f}", (float(s["lam"]), float(np.asarray(branch.xmax)[row, k])),
+                ax.plot(s.lam, float(np.asarray(arr)[row, k]), mk, color=colour, ms=8, mec="k",
+                        mfc=colour if s.located else "none", label=key if key not in seen else None, zorder=5)
+                seen.add(key)
+            ax.annotate(f"{s.type}{'' if s.located else '?'} {s.lam:.4f}",
+                        (s.lam, float(np.asarray(branch.xmax)[row, k])),
                         textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
         ax.set_ylabel(label + (f"  (c = {c_um:.1f} um)" if c_um else ""))
         ax.grid(alpha=0.3)
@@ -128,16 +131,16 @@ def plot_multipliers(branch: Any, *, n_show: int | None = 8, title: str | None =
         sc = ax.scatter(mu.real.ravel(), mu.imag.ravel(), c=cc.ravel(), s=9, cmap="viridis")
         fig.colorbar(sc, ax=ax, label=r"speed $\bar\Omega$")
     for s in branch.special:
-        m = s.get("multipliers")
+        m = s.spectrum
         if m is None:
             continue
         m = np.asarray(m)
         if m.ndim == 2:  # [re, im] pairs from JSON
             m = m[:, 0] + 1j * m[:, 1]
         m = m[:n_show] if n_show is not None else m
-        _, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
+        _, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
         ax.scatter(m.real, m.imag, s=70, facecolors="none", edgecolors=colour, lw=1.5,
-                   label=f"{s['type']} at {float(s['lam']):.4f}")
+                   label=f"{s.type} at {s.lam:.4f}")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(r"Re $\mu$")
     ax.set_ylabel(r"Im $\mu$")
@@ -176,13 +179,13 @@ def plot_equilibria(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), colum
     for s, row in _special_rows(branch):
         if row is None:
             continue
-        mk, colour = SPECIAL_STYLE.get(s["type"], ("o", "k"))
-        lab = f"{s['type']} {float(s['lam']):.4f}"
+        mk, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
+        lab = f"{s.type} {s.lam:.4f}"
         for name, k in zip(names, columns):
-            axes[0].plot(float(s["lam"]), float(np.asarray(branch.xmax)[row, k]), mk, color=colour, ms=10, mec="k")
-        axes[0].annotate(lab, (float(s["lam"]), float(np.asarray(branch.xmax)[row, columns[-1]])),
+            axes[0].plot(s.lam, float(np.asarray(branch.xmax)[row, k]), mk, color=colour, ms=10, mec="k")
+        axes[0].annotate(lab, (s.lam, float(np.asarray(branch.xmax)[row, columns[-1]])),
                          textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
-        axes[1].plot(float(s["lam"]), float(re[row]), mk, color=colour, ms=10, mec="k", label=lab)
+        axes[1].plot(s.lam, float(re[row]), mk, color=colour, ms=10, mec="k", label=lab)
     axes[0].set_ylabel("journal position over c")
     axes[1].set_ylabel(r"critical eigenvalue Re $\lambda$ (per $\tau$)")
     axes[1].set_xlabel(r"speed $\bar\Omega$")
@@ -219,8 +222,8 @@ def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None =
             for xs, ys in _segments(lam, W, ~stable):
                 ax.plot(xs, ys, "--", color=colour, lw=1.1)
         for s in b.special_of("NS"):
-            ax.axvline(float(s["lam"]), color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
-            ax.annotate(f"NS {float(s['lam']):.4f}", (float(s["lam"]), 0.0), textcoords="offset points",
+            ax.axvline(s.lam, color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
+            ax.annotate(f"NS {s.lam:.4f}", (s.lam, 0.0), textcoords="offset points",
                         xytext=(4, 10), fontsize=8, color=SPECIAL_STYLE["NS"][1])
         for c in sign_changes(lam, E.W_cb):
             ax.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec="tab:red", ms=8)

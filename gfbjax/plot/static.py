@@ -2,9 +2,9 @@
 
 Every function returns the :class:`matplotlib.figure.Figure` and, given ``path``, also saves it (the format follows
 the file suffix, e.g. ``.png`` or ``.pdf``).  Figures are made with ``pyplot`` so that they show inline in
-notebooks; scripts that make many figures should ``plt.close(fig)`` after saving.  Without a display (no
-``DISPLAY``/``WAYLAND_DISPLAY`` on Linux and no ``MPLBACKEND`` set) the non-interactive Agg backend is selected on
-import.
+notebooks; scripts that make many figures should ``plt.close(fig)`` after saving.  Importing this module leaves
+the matplotlib backend as it is (matplotlib itself falls back to the non-interactive Agg backend without a
+display; the ``gfbjax`` command line selects Agg explicitly).
 
 Conventions (DESIGN.md): lengths over the radial clearance ``c``, pressures over ambient ``p0``, time over
 ``t* = 6 mu R^2 / (p0 c^2)``; y points up, gravity and the extra load act downwards; theta is measured from the
@@ -23,21 +23,13 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-import matplotlib
-
-if (sys.platform.startswith("linux") and "MPLBACKEND" not in os.environ
-        and not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
-        and "ipykernel" not in sys.modules):
-    matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 __all__ = ["plot_load_displacement", "plot_equilibrium_locus", "plot_static_summary", "save_figure"]
 

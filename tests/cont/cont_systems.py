@@ -60,3 +60,12 @@ def mathieu_duffing(z, a, p):
     x, v, u, s = z[0], z[1], z[2], z[3]
     r2 = u * u + s * s
     return jnp.array([v, -(a - 2.0 * q * u) * x - beta * x ** 3, u + 2.0 * s - u * r2, -2.0 * u + s - s * r2])
+
+
+def correct(f, args, orbit, con=None, *, max_iter=12, tol=1e-10):
+    """One dense cycle correction through the public API (the NewtonSolution; ``x`` is the orbit)."""
+    from gfbjax.cont import CycleProblem, CycleSettings, DenseCondensation, correct_cycle
+    settings = CycleSettings(m=int(orbit.xi.shape[1]) + 1, newton_tol=tol, newton_step_tol=tol,
+                             newton_max_iter=max_iter, fast_iter=min(3, max_iter), linear_solver=DenseCondensation())
+    sol, _ = correct_cycle(CycleProblem(f, orbit.n, args), orbit, con, settings=settings)
+    return sol

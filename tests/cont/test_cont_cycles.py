@@ -6,9 +6,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from gfbjax.cont import (Branch, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
-                         continue_cycles, continue_equilibria, hopf_point, start_from_branch,
-                         start_from_hopf)
+from gfbjax.cont import (Branch, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings, Natural,
+                         Outcome, TransferProduct, continue_cycles, continue_equilibria, hopf_point,
+                         start_from_branch, start_from_hopf)
 from cont_systems import stuart_landau, stuart_landau_sub
 
 W = 2.0
@@ -29,7 +29,7 @@ def sl_branch():
 
 def test_supercritical_hopf_branch(sl_branch):
     br = sl_branch
-    assert len(br) >= 6, br.reason
+    assert len(br) >= 6, br.message
     assert np.all(br.lam > 0)                                   # supercritical: lam > 0
     assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)       # radius sqrt(lam)
     assert np.allclose(br.period, np.pi, rtol=1e-8)             # 2 pi / w
@@ -39,7 +39,7 @@ def test_supercritical_hopf_branch(sl_branch):
     assert np.max(br.trivial_error) < 1e-10
     assert np.allclose(br.multipliers[:, 1].real, np.exp(-2 * br.lam * np.pi), atol=1e-8)
     assert np.all(br.stable)
-    assert br.reason.startswith("lam=") or br.reason == "max_points reached"
+    assert br.outcome in (Outcome.REACHED_END, Outcome.MAX_POINTS)
     assert br.special == []
 
 
@@ -50,11 +50,11 @@ def test_save_load_roundtrip_plain_numpy(sl_branch, tmp_path):
         assert np.array_equal(z["multipliers"], sl_branch.multipliers)
         assert z["state_xm"].shape == (len(sl_branch), 11, 2)
     meta = json.loads(js.read_text())
-    assert meta["kind"] == "cycles" and meta["reason"] == sl_branch.reason and "lam" in meta["keys"]
+    assert meta["kind"] == "cycles" and meta["outcome"] == sl_branch.outcome.value and "lam" in meta["keys"]
     back = Branch.load(tmp_path / "sl")
     for k in ("lam", "period", "l2", "xmax", "xmin", "multipliers", "stable", "newton_iterations", "ds"):
         assert np.array_equal(getattr(back, k), getattr(sl_branch, k)), k
-    assert back.reason == sl_branch.reason and back.m == 4
+    assert back.outcome is sl_branch.outcome and back.message == sl_branch.message and back.m == 4
 
 
 def test_restart_from_saved_point(sl_branch):
@@ -67,7 +67,7 @@ def test_restart_from_saved_point(sl_branch):
 
 
 def test_natural_parameter_mode():
-    st = CycleSettings(m=4, N=10, ds=0.1, max_points=4, mode="natural", predictor="secant")
+    st = CycleSettings(m=4, N=10, ds=0.1, max_points=4, algorithm=Natural())
     prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
     from gfbjax.cont import start_from_function
     start = start_from_function(lambda t: 0.6 * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
@@ -88,8 +88,8 @@ def test_subcritical_hopf_and_fold_of_cycles():
     r2 = br.l2 ** 2
     assert np.allclose(br.lam, r2 ** 2 - r2, atol=1e-9)
     lpc = br.special_of("LPC")
-    assert len(lpc) == 1 and lpc[0]["located"], br.special
-    assert abs(lpc[0]["lam"] + 0.25) < 1e-8
+    assert len(lpc) == 1 and lpc[0].located, br.special
+    assert abs(lpc[0].lam + 0.25) < 1e-8 and abs(lpc[0].residual) <= st.locate_tol
     assert br.stable[-1] and br.lam[-1] > -0.25
 
 
@@ -98,8 +98,12 @@ def test_bad_settings_name_the_field():
         CycleSettings(ds=0.1, ds_min=0.5)
     with pytest.raises(ValueError, match="m "):
         CycleSettings(m=9)
-    with pytest.raises(ValueError, match="mode"):
-        CycleSettings(mode="shooting")
+    with pytest.raises(ValueError, match="algorithm"):
+        CycleSettings(algorithm="shooting")
+    with pytest.raises(ValueError, match="linear_solver"):
+        CycleSettings(linear_solver="dense")
+    with pytest.raises(ValueError, match="floquet"):
+        CycleSettings(floquet="product")
     with pytest.raises(ValueError, match="n_trivial"):
         CycleProblem(stuart_landau, 2, n_trivial=3)
 
@@ -116,35 +120,42 @@ def test_neimark_sacker_detection_and_angle():
                             0 * t, 0 * t], 1), T, 0.3, st)
     br = continue_cycles(prob, st, start)
     ns = br.special_of("NS")
-    assert len(ns) == 1 and ns[0]["located"], br.special
-    assert abs(ns[0]["lam"] - 0.5) < 1e-8
-    assert abs(ns[0]["angle"] - nu * T) < 1e-8
+    assert len(ns) == 1 and ns[0].located, br.special
+    assert abs(ns[0].lam - 0.5) < 1e-8
+    assert abs(ns[0].angle - nu * T) < 1e-8
     assert br.stable[0] and not br.stable[-1]
 
 
 def test_continuation_compiles_newton_kernel_once(sl_branch):
     """The Newton kernel is traced once per (f, n, N, m): lam, T, references are
     traced arrays.  Another continuation with the same shapes adds no entry."""
-    from gfbjax.cont import collocation as col
-    before = col._step_and_tangent._cache_size()
+    from gfbjax.cont import _linear
+    before = _linear._dense_correct._cache_size()
     st = CycleSettings(m=4, N=10, ds=0.05, max_points=3)
     prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
     continue_cycles(prob, st, start_from_branch(sl_branch, 2))
-    assert col._step_and_tangent._cache_size() == before
+    assert _linear._dense_correct._cache_size() == before
 
 
-def test_callback_stop_and_errors_keep_the_branch(sl_branch):
+def test_callback_stop_and_user_errors_propagate(sl_branch):
     prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
-    st = CycleSettings(m=4, N=10, ds=0.05, max_points=10, floquet="product")
+    st = CycleSettings(m=4, N=10, ds=0.05, max_points=10, floquet=TransferProduct())
     seen = []
     br = continue_cycles(prob, st, start_from_branch(sl_branch, 3),
                          callback=lambda i, rec: seen.append(i) or len(seen) < 3)
-    assert br.reason == "stopped by callback" and len(br) == 3 and seen == [0, 1, 2]
+    assert br.outcome is Outcome.STOPPED and len(br) == 3 and seen == [0, 1, 2]
     assert np.allclose(br.l2, np.sqrt(br.lam), rtol=1e-9)
 
     def boom(i, rec):
         if i == 2:
             raise RuntimeError("model blew up")
 
-    br = continue_cycles(prob, st, start_from_branch(sl_branch, 3), callback=boom, progress=True)
-    assert br.reason.startswith("error: RuntimeError('model blew up')") and len(br) == 3
+    # a bug in user code is not a reason for the branch to end: it propagates
+    with pytest.raises(RuntimeError, match="model blew up"):
+        continue_cycles(prob, st, start_from_branch(sl_branch, 3), callback=boom, progress=True)
+
+    def bad_field(x, lam, args):
+        raise ValueError("shape mismatch in my field")
+
+    with pytest.raises(ValueError, match="shape mismatch"):
+        continue_cycles(CycleProblem(bad_field, 2, jnp.asarray(W)), st, start_from_branch(sl_branch, 3))

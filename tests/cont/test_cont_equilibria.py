@@ -12,9 +12,9 @@ def test_fold_at_zero():
     prob = EquilibriumProblem(fold_1d, 1)
     br = continue_equilibria(prob, EquilibriumSettings(ds=0.1, max_points=30, direction=-1), [1.0], 1.0)
     folds = br.special_of("FOLD")
-    assert len(folds) == 1 and folds[0]["located"]
-    assert abs(folds[0]["lam"]) < 1e-9
-    i = folds[0]["index"]
+    assert len(folds) == 1 and folds[0].located
+    assert abs(folds[0].lam) < 1e-9
+    i = folds[0].index
     assert abs(br.states["x"][i, 0]) < 1e-4
     # past the fold the lower branch x = -sqrt(lam) (unstable) is followed
     assert br.lam[-1] > 0 and br.states["x"][-1, 0] < 0 and not br.stable[-1]
@@ -28,7 +28,7 @@ def test_hopf_stuart_landau():
     br = continue_equilibria(prob, EquilibriumSettings(ds=0.07, max_points=8), np.zeros(2), -0.3)
     hs = br.special_of("HOPF")
     assert len(hs) == 1
-    assert abs(hs[0]["lam"]) < 1e-10 and abs(hs[0]["angle"] - w) < 1e-10
+    assert abs(hs[0].lam) < 1e-10 and abs(hs[0].omega - w) < 1e-10
     hp = hopf_point(prob, br)
     assert abs(hp.omega - w) < 1e-10 and abs(hp.lam) < 1e-10
     J = np.array([[hp.lam, -w], [w, hp.lam]])

@@ -4,8 +4,9 @@ import jax.numpy as jnp
 import numpy as np
 from math import factorial
 
-from gfbjax.cont import collocation as col
-from gfbjax.cont import floquet
+from gfbjax.cont import _collocation as col
+from gfbjax.cont import _floquet as floquet
+from cont_systems import correct
 
 
 def test_periodic_qr_on_random_product_with_known_eigenvalues():
@@ -73,9 +74,9 @@ def test_stable_floquet_on_stiff_cycle():
     o = col.orbit_from_function(
         lambda t: np.concatenate([np.sqrt(LAM) * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
                                   np.zeros((len(t), NZ))], 1), T * 1.01, LAM, sch, col.uniform_mesh(N))
-    res = col.newton(stiff_field, jnp.asarray(A), o, col.natural_constraint(o, LAM), sch)
+    res = correct(stiff_field, jnp.asarray(A), o, col.natural_constraint(o, LAM))
     assert res.converged
-    G = np.asarray(col.transfer_matrices(stiff_field, jnp.asarray(A), res.orbit, sch))
+    G = np.asarray(col.transfer_matrices(stiff_field, jnp.asarray(A), res.x, sch))
     out = floquet.multipliers_periodic(G)
     mu = np.sort(out.multipliers.real)[::-1]
     discrete = np.sort(np.concatenate([[1.0, np.exp(-2 * LAM * T)], _pade(RATES_T / N, 4) ** N]))[::-1]

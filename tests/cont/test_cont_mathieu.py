@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.special import mathieu_a, mathieu_b
 
-from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_function
+from gfbjax.cont import Outcome, CycleProblem, DenseCondensation, CycleSettings, continue_cycles, start_from_function
 from cont_systems import mathieu_duffing
 
 Q = 5.0
@@ -34,16 +34,16 @@ def _trivial_cycle(t):
 @pytest.mark.parametrize("a0, a_end, a_ref", [(2.0, 1.7, A1_AS), (-5.7, -5.795, B1_AS)])
 def test_pd_on_mathieu_characteristic_curve(a0, a_end, a_ref):
     st = CycleSettings(m=4, N=40, ds=0.02, ds_max=0.05, max_points=40, direction=-1, lam_min=a_end,
-                       detect=("PD",), linear_solver="dense")
+                       detect=("PD",), linear_solver=DenseCondensation())
     prob = CycleProblem(mathieu_duffing, 4, jnp.asarray([Q, 1.0]), record=[0, 1])
     br = continue_cycles(prob, st, start_from_function(_trivial_cycle, np.pi, a0, st))
-    assert br.reason.startswith("lam="), br.reason
+    assert br.outcome is Outcome.REACHED_END, br.message
     pds = br.special_of("PD")
-    assert len(pds) == 1 and pds[0]["located"], br.special
-    print(f"PD at a = {pds[0]['lam']:.10f}, A&S {a_ref:.8f}, diff {pds[0]['lam'] - a_ref:.2e}")
-    assert abs(pds[0]["lam"] - a_ref) < 1e-7
+    assert len(pds) == 1 and pds[0].located, br.special
+    print(f"PD at a = {pds[0].lam:.10f}, A&S {a_ref:.8f}, diff {pds[0].lam - a_ref:.2e}")
+    assert abs(pds[0].lam - a_ref) < 1e-7
     # at the flip the pair meets at -1 in a Jordan block: |mu + 1| ~ sqrt|a - a_c|, so 1e-9 in a gives ~3e-5
-    assert np.min(np.abs(pds[0]["multipliers"] + 1.0)) < 1e-4
+    assert np.min(np.abs(pds[0].spectrum + 1.0)) < 1e-4
     # the cycle is the trivial one all along: period pi, x = 0, trivial multiplier 1, oscillator's exp(-2 pi)
     assert np.allclose(br.period, np.pi, rtol=1e-10)
     assert np.max(np.abs(br.xmax[:, 0])) < 1e-10

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_pd, start_from_samples
+from gfbjax.cont import Outcome, CycleProblem, DenseCondensation, CycleSettings, continue_cycles, start_from_pd, start_from_samples
 from cont_systems import forced_duffing
 
 D, W = 0.3, 1.2
@@ -72,16 +72,16 @@ def pd_branch(reference):
 def test_pd_parameter_matches_scipy_reference(reference, pd_branch):
     _, g_ref = reference
     prob, br = pd_branch
-    assert br.reason.startswith("lam="), br.reason
+    assert br.outcome is Outcome.REACHED_END, br.message
     pds = br.special_of("PD")
-    assert len(pds) == 1 and pds[0]["located"], br.special
-    print(f"PD gamma: engine {pds[0]['lam']:.13f}  scipy reference {g_ref:.13f}  diff {pds[0]['lam'] - g_ref:.2e}")
-    assert abs(pds[0]["lam"] - g_ref) < 1e-6
-    mu = pds[0]["multipliers"]
+    assert len(pds) == 1 and pds[0].located, br.special
+    print(f"PD gamma: engine {pds[0].lam:.13f}  scipy reference {g_ref:.13f}  diff {pds[0].lam - g_ref:.2e}")
+    assert abs(pds[0].lam - g_ref) < 1e-6
+    mu = pds[0].spectrum
     assert np.min(np.abs(mu + 1.0)) < 1e-6
     assert np.max(br.trivial_error) < 1e-8
     # forcing oscillator multiplier exp(-2T), Duffing pair product exp(-d T)
-    i = pds[0]["index"]
+    i = pds[0].index
     assert np.min(np.abs(br.multipliers[i] - np.exp(-2 * T))) < 1e-8
     assert np.allclose(br.period, T, rtol=1e-10)
     assert br.stable[0] and not br.stable[-1]
@@ -91,13 +91,13 @@ def test_switch_to_period_two_branch(pd_branch):
     prob, br = pd_branch
     st = CycleSettings(m=4, N=40, ds=0.01, max_points=4, detect=(), save_states=True)
     br2 = continue_cycles(prob, st, start_from_pd(prob, br, 0))
-    assert len(br2) == 4, br2.reason
+    assert len(br2) == 4, br2.message
     assert np.allclose(br2.period, 2 * T, rtol=1e-9)
     xm = br2.states["xm"]
     N = (xm.shape[1] - 1) // 2
     split = np.max(np.abs(xm[:, :N + 1, 0] - xm[:, N:, 0]), axis=1)
     assert np.all(split > 1e-3)                       # genuinely period-2, not the doubled period-1
     assert np.all(np.diff(split) > 0)                 # and growing away from the PD point
-    g_pd = br.special_of("PD")[0]["lam"]
+    g_pd = br.special_of("PD")[0].lam
     assert np.all(br2.lam > g_pd)                     # supercritical flip: period-2 orbits beyond gamma_PD
     assert br2.stable[-1]

@@ -1,4 +1,4 @@
-"""The sparse linear algebra of ``cont.sparse_colloc`` (per-interval sparse LU, GMRES, Arnoldi) against analytic
+"""The sparse linear solver (``cont.SparseSweep``) (per-interval sparse LU, GMRES, Arnoldi) against analytic
 Floquet multipliers and against the dense condensation, on a ring of diffusively coupled Stuart-Landau oscillators.
 
 Ring of K oscillators z_k' = (lam + i w) z_k - |z_k|^2 z_k + D (z_{k+1} - 2 z_k + z_{k-1}): the synchronous cycle
@@ -11,10 +11,10 @@ import jax.numpy as jnp
 import pytest
 
 from gfbjax import cont
-from gfbjax.cont import collocation as col
-from gfbjax.cont.palc import DenseBackend, make_backend
-from gfbjax.cont.sparse_colloc import SparseCollocation
-from gfbjax.cont.sparsity import color_pattern, jacobian_values
+from gfbjax.cont import _collocation as col
+from gfbjax.cont import Arnoldi, DenseCondensation, PeriodicQR, SparseSweep, bind_solver
+from gfbjax.cont._sparse import SparseCollocation
+from gfbjax.cont._sparsity import color_pattern, jacobian_values
 
 K, LAM, W, D = 80, 0.5, 2 * np.pi, 1.0
 
@@ -78,10 +78,10 @@ def test_coloring_recovers_jacobian(setup):
 def test_sparse_newton_step_equals_dense(setup):
     prob, sch, guess = setup
     con = col.natural_constraint(guess, LAM)
-    d_dense = col.newton_step(prob.f, prob.args, guess, con, sch)
-    sp = SparseCollocation(prob.f, prob.args, prob.n, prob.jac_sparsity, sch)
     rc, rper, rs = (np.asarray(a) for a in col.residual(prob.f, prob.args, guess, con, sch))
-    d_sparse = sp.linearise(guess, con).solve(-rc, -rper, -rs, 1e-12)
+    d_dense = DenseCondensation().bind(prob, sch).linearise(guess, con).solve(-rc, -rper, -rs)
+    sp = SparseSweep(gmres_rtol=1e-12).bind(prob, sch)
+    d_sparse = sp.linearise(guess, con).solve(-rc, -rper, -rs)
     scale = float(jnp.max(jnp.abs(d_dense.to_flat())))
     assert scale > 1e-3  # the guess is far enough from the cycle for a real test
     assert float(jnp.max(jnp.abs(d_sparse.to_flat() - d_dense.to_flat()))) < 1e-9 * scale
@@ -89,22 +89,24 @@ def test_sparse_newton_step_equals_dense(setup):
 
 def test_sparse_cycle_and_multipliers_analytic(setup):
     prob, sch, guess = setup
-    backend = make_backend(prob, sch)  # auto: n = 160 with a pattern -> sparse
+    settings = cont.CycleSettings(newton_tol=1e-10, newton_step_tol=1e-10)
+    backend = bind_solver(prob, sch, settings)  # auto: n = 160 with a pattern -> sparse
     assert isinstance(backend, SparseCollocation)
-    res = backend.newton(guess, col.natural_constraint(guess, LAM), tol=1e-10, rtol_step=1e-10)
-    assert res.converged, res.reason
-    o = res.orbit
+    res, lin = backend.correct(guess, col.natural_constraint(guess, LAM), settings.newton)
+    assert res.converged, res.outcome
+    o = res.x
     assert float(o.T) == pytest.approx(2 * np.pi / W, rel=1e-9)
     radius = np.sqrt(np.asarray(o.xm)[:, 0::2] ** 2 + np.asarray(o.xm)[:, 1::2] ** 2)
     np.testing.assert_allclose(radius, np.sqrt(LAM), atol=1e-7)
-    mu, stable, terr = cont.analyse(prob, o, sch, backend=backend)
-    assert len(mu) == backend.n_multipliers
+    an = cont.analyse(prob, lin, Arnoldi(k=12))
+    mu, stable, terr = an["spectrum"], an["stable"], an["trivial_error"]
+    assert len(mu) == 12
     exact = analytic_multipliers(K, LAM, W, D)[: len(mu)]
     np.testing.assert_allclose(np.sort(np.abs(mu))[::-1], exact, atol=1e-7)
     assert np.max(np.abs(mu.imag)) < 1e-7
     assert terr < 1e-9 and stable
     # the dense condensation at the same orbit: the same leading multipliers
-    mu_dense = DenseBackend(prob, sch).multipliers(o)
+    mu_dense = PeriodicQR().multipliers(DenseCondensation().bind(prob, sch).linearise(o), {})
     np.testing.assert_allclose(np.abs(mu_dense[: len(mu)]), np.abs(mu), atol=1e-9)
 
 
@@ -120,12 +122,12 @@ def test_sparse_and_dense_branches_agree():
 
     guess = col.orbit_from_function(x_of_t, 2 * np.pi / W, LAM, sch, col.uniform_mesh(12))
     out = {}
-    for solver in ("dense", "sparse"):
+    for name, solver, floquet in (("dense", DenseCondensation(), None), ("sparse", SparseSweep(), Arnoldi(k=6))):
         s = cont.CycleSettings(m=4, N=12, ds=0.05, ds_max=0.05, max_points=4, linear_solver=solver,
-                               n_multipliers=6)
+                               floquet=floquet)
         b = cont.continue_cycles(prob, s, cont.CycleStart(guess))
-        assert len(b) == 4, b.reason
-        out[solver] = b
+        assert len(b) == 4, b.message
+        out[name] = b
     np.testing.assert_allclose(out["sparse"].lam, out["dense"].lam, atol=1e-9)
     np.testing.assert_allclose(out["sparse"].l2, out["dense"].l2, atol=1e-9)
     np.testing.assert_allclose(np.abs(out["sparse"].multipliers), np.abs(out["dense"].multipliers[:, :6]),
@@ -138,7 +140,7 @@ def test_sparse_requires_pattern(setup):
         cont.CycleProblem(f=ring, n=prob.n, args=prob.args, jac_sparsity=np.ones((3, 3), bool))
     bare = cont.CycleProblem(f=ring, n=prob.n, args=prob.args)
     with pytest.raises(ValueError, match="jac_sparsity"):
-        make_backend(bare, sch, cont.CycleSettings(linear_solver="sparse"))
+        bind_solver(bare, sch, cont.CycleSettings(linear_solver=SparseSweep()))
     with pytest.raises(ValueError, match="linear_solver"):
         cont.CycleSettings(linear_solver="banded")
 
@@ -147,4 +149,74 @@ def test_sparse_without_pattern_raises_before_continuing(setup):
     _, sch, guess = setup
     bare = cont.CycleProblem(f=ring, n=2 * K, args=jnp.array([W, D]))
     with pytest.raises(ValueError, match="jac_sparsity"):
-        cont.continue_cycles(bare, cont.CycleSettings(linear_solver="sparse", max_points=2), cont.CycleStart(guess))
+        cont.continue_cycles(bare, cont.CycleSettings(linear_solver=SparseSweep(), max_points=2), cont.CycleStart(guess))
+
+
+def _small_ring():
+    k = 6
+    prob = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, D]), jac_sparsity=ring_pattern(k))
+    sch = cont.Scheme(3)
+    r = np.sqrt(LAM)
+
+    def x_of_t(t):
+        th = 2 * np.pi * t[:, None] + 0.2 * np.sin(2 * np.pi * np.arange(k) / k)[None, :]
+        return np.stack([1.1 * r * np.cos(th), 0.9 * r * np.sin(th)], axis=2).reshape(len(t), -1)
+
+    orbit = col.orbit_from_function(x_of_t, 1.03 * 2 * np.pi / W, LAM, sch, col.uniform_mesh(5))
+    return prob, sch, orbit
+
+
+def test_transposed_solves_equal_the_explicit_transpose():
+    """J^T lam = g on both solvers against a dense solve with the explicitly formed Jacobian (jax.jacfwd of the
+    flattened residual), at an orbit off the solution and with a random pseudo-arclength row."""
+    prob, sch, o = _small_ring()
+    rng = np.random.default_rng(0)
+    flat = o.to_flat()
+    v = o.from_flat(jnp.asarray(rng.normal(size=flat.shape)))
+    con = col.palc_constraint(o, v, 0.01, ref=o)
+    J = np.asarray(col.dense_jacobian(prob.f, prob.args, o, con, sch))
+    g = o.from_flat(jnp.asarray(rng.normal(size=flat.shape)))
+    ref = np.linalg.solve(J.T, np.asarray(g.to_flat()))
+    N, m, n = o.N, sch.m, o.n
+    for solver in (DenseCondensation(), SparseSweep(gmres_rtol=1e-13)):
+        lam_c, lam_per, lam_s = solver.bind(prob, sch).linearise(o, con).solve_transpose(g)
+        got = np.concatenate([np.ravel(lam_c), lam_per, lam_s])
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.max(np.abs(ref)), err_msg=solver.name)
+        assert np.asarray(lam_c).shape == (N, m, n)
+
+
+def test_adjoint_gradients_agree_on_both_solvers():
+    """d(period)/d(args) and d|mu_1|/d(args) at a converged ring cycle: the adjoint on the sparse solver equals the
+    dense one and the tangent mode, and the period's derivative equals the analytic d(2 pi / w)/dw."""
+    prob, sch, o = _small_ring()
+    period = lambda orbit, args: orbit.T  # noqa: E731
+    grads, mus = {}, {}
+    for solver in (DenseCondensation(), SparseSweep(gmres_rtol=1e-13)):
+        s = cont.CycleSettings(m=3, newton_tol=1e-11, newton_step_tol=1e-11, linear_solver=solver)
+        sol, lin = cont.correct_cycle(prob, o, settings=s)
+        assert sol.converged
+        grads[solver.name] = np.asarray(cont.adjoint_gradient(prob, lin, sch, period))
+        mu, gm = cont.multiplier_gradient(prob, lin, sch)
+        mus[solver.name] = (mu, np.asarray(gm))
+        dargs = [jnp.array([1.0, 0.0]), jnp.array([0.0, 1.0])]
+        tangents = cont.orbit_sensitivities(prob, lin, dargs, sch)
+        mu_t, dmu = cont.multiplier_derivatives(prob, lin, sch, tangents, dargs)
+        tangent_mod = np.array([np.real(np.conj(mu_t) * d) / abs(mu_t) for d in dmu])
+        np.testing.assert_allclose(np.asarray(gm), tangent_mod, rtol=1e-7, atol=1e-10, err_msg=solver.name)
+    # central differences of the discrete period (the collocation's own T, 5 intervals of degree 3)
+    fd = []
+    for i in range(2):
+        Ts = []
+        for h in (1e-5, -1e-5):
+            args = prob.args.at[i].add(h)
+            p2 = cont.CycleProblem(f=ring, n=prob.n, args=args, jac_sparsity=prob.jac_sparsity)
+            sol, _ = cont.correct_cycle(p2, o, settings=cont.CycleSettings(m=3, newton_tol=1e-12,
+                                                                            newton_step_tol=1e-12))
+            Ts.append(float(sol.x.T))
+        fd.append((Ts[0] - Ts[1]) / 2e-5)
+    np.testing.assert_allclose(grads["dense"], fd, rtol=1e-6, atol=1e-9)
+    # and the continuous limit T = 2 pi / w (discretisation error O(h^6) ~ 1e-4 here); D does not change T
+    np.testing.assert_allclose(grads["dense"][0], -2 * np.pi / W ** 2, rtol=2e-4)
+    np.testing.assert_allclose(grads["dense"][1], 0.0, atol=1e-9)
+    np.testing.assert_allclose(grads["sparse"], grads["dense"], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(mus["sparse"][1], mus["dense"][1], rtol=1e-7, atol=1e-10)

@@ -28,11 +28,13 @@ import argparse
 import dataclasses
 import json
 import math
+import tempfile
 import types
 import typing
 from pathlib import Path
 from typing import Any, Iterable
 
+from ... import limits
 from ...params import VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
 
 __all__ = [
@@ -44,6 +46,7 @@ __all__ = [
     "traced_params",
     "float_list",
     "check_option",
+    "check_range",
     "write_json",
     "write_summary",
     "to_jsonable",
@@ -77,12 +80,14 @@ def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
               "converted to the field's type ('none' for an optional field). Fields: " + _field_doc()))
     g.add_argument("--nx", type=int, default=None, metavar="N",
                    help="circumferential finite-difference intervals over the 2 pi of the foil (SystemSpec.Nx; "
-                        f"default {SystemSpec.Nx}, at least 16)")
+                        f"default {SystemSpec.Nx}, in {limits.NX.interval()})")
     g.add_argument("--nz", type=int, default=None, metavar="N",
                    help="axial intervals over the half length, edge to mid-plane (SystemSpec.Nz; "
-                        f"default {SystemSpec.Nz}, at least 2)")
+                        f"default {SystemSpec.Nz}, in {limits.NZ.interval()}); the grid's (Nx - 1)(Nz + 1) states "
+                        f"plus the rotor's must not exceed {limits.MAX_DENSE_UNKNOWNS} (dense Jacobians)")
     g.add_argument("--out", type=Path, default=Path("results") / command, metavar="DIR",
-                   help="output folder, created if needed (default: %(default)s)")
+                   help="output folder, created if needed and checked to be writable before any computation "
+                        "(default: %(default)s)")
 
 
 def _convert(name: str, text: str, tp: Any) -> Any:
@@ -165,21 +170,28 @@ def traced_params(spec: SystemSpec):
 
 
 def output_dir(args: argparse.Namespace) -> Path:
-    """``--out`` as a created folder."""
+    """``--out`` as a created, writable folder (checked by writing a probe file, so that a read-only folder or
+    file system fails here, before the computation, and not when the results are written)."""
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"--out {str(out)!r} is not a folder")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ParameterError(f"--out {str(out)!r} cannot be created: {exc.strerror or exc}") from None
     if not out.is_dir():
         raise ParameterError(f"--out {str(out)!r} is not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise ParameterError(f"--out {str(out)!r} is not writable: {exc.strerror or exc}") from None
     return out
 
 
-def float_list(option: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
-               increasing: bool = False, what: str = ""):
-    """An argparse ``type`` for comma-separated numbers, checked against ``[lo, hi]`` (``(lo, hi]`` with
-    ``lo_open``); errors name ``option``."""
+def float_list(option: str, rng: limits.Range | None = None, *, increasing: bool = False):
+    """An argparse ``type`` for comma-separated numbers, each checked against ``rng`` (a
+    :class:`gfbjax.limits.Range`); argparse reports errors with the option's name."""
     def parse(text: str) -> list[float]:
         try:
             vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
@@ -188,27 +200,27 @@ def float_list(option: str, lo: float | None = None, hi: float | None = None, *,
         if not vals:
             raise argparse.ArgumentTypeError("expected at least one number")
         for v in vals:
-            check_option(option, v, lo, hi, lo_open=lo_open, what=what, exc=argparse.ArgumentTypeError)
+            try:
+                check_range(option, v, rng)
+            except ParameterError as exc:
+                raise argparse.ArgumentTypeError(str(exc).removeprefix(f"{option} = ")) from None
         if increasing and any(b <= a for a, b in zip(vals, vals[1:])):
             raise argparse.ArgumentTypeError(f"values must increase, got {text!r}")
         return vals
     return parse
 
 
+def check_range(option: str, value: Any, rng: limits.Range | None) -> Any:
+    """Check an option against a named range of :mod:`gfbjax.limits` (None: any finite number); the message names
+    the option, e.g. ``--speed = 60 is outside the allowed range (0, 50] (dimensionless speed ...)``."""
+    return (rng or limits.Range(option)).check(value, option)
+
+
 def check_option(option: str, value: float, lo: float | None = None, hi: float | None = None, *,
-                 lo_open: bool = False, what: str = "", exc: type[Exception] = ParameterError) -> float:
-    """Check a numeric option; raise ``exc`` with a message naming ``option`` and the allowed range."""
-    bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) or (
-        hi is not None and value > hi)
-    if bad:
-        left = "(" if lo_open else "["
-        rng = f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
-        extra = f" ({what})" if what else ""
-        msg = f"{option} = {value:g} is outside the allowed range {rng}{extra}"
-        if exc is argparse.ArgumentTypeError:
-            msg = f"{value:g} is outside the allowed range {rng}{extra}"
-        raise exc(msg)
-    return value
+                 lo_open: bool = False, what: str = "", integer: bool = False) -> Any:
+    """Check a numeric option that has no named range in :mod:`gfbjax.limits` (a step size, a count of points);
+    ParameterError naming ``option`` and the range."""
+    return limits.Range(option, lo, hi, lo_open=lo_open, what=what, integer=integer).check(value)
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -247,12 +259,12 @@ def write_summary(out: Path, name: str, data: dict) -> Path:
 
 def check_continuation_options(args: argparse.Namespace) -> None:
     """Checks shared by the continuation commands: speed range --start/--end, steps --ds/--ds-max, --max-points."""
-    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
+    check_range("--start", args.start, limits.SPEED)
+    check_range("--end", args.end, limits.SPEED)
     if args.start == args.end:
         raise ParameterError("--end must differ from --start")
     check_option("--ds", args.ds, 0.0, None, lo_open=True, what="arclength step")
     check_option("--ds-max", args.ds_max, 0.0, None, lo_open=True, what="arclength step")
     if args.ds_max < args.ds:
         raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
-    check_option("--max-points", args.max_points, 2, 10**6, what="points")
+    check_option("--max-points", args.max_points, 2, 10**6, what="points", integer=True)

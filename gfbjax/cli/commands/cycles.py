@@ -9,9 +9,10 @@ import math
 import time
 from typing import Any
 
+from ... import limits
 from ...params import ParameterError
-from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
-                      traced_params, write_summary)
+from ._common import (add_system_options, check_continuation_options, check_option, check_range, output_dir,
+                      spec_from_args, traced_params, write_summary)
 
 NAME = "cycles"
 
@@ -21,7 +22,8 @@ forced response at --start towards --end: orthogonal collocation (--N intervals 
 steps, Floquet multipliers at every point, and the fold (LPC), period-doubling (PD) and Neimark-Sacker (NS)
 bifurcations, located by regula falsi unless --no-locate.  A progress bar advances with the speed.
 
-Writes to --out: branch.npz + branch.json (the branch, gfbjax.cont.Branch.load; plain numpy + json),
+Writes to --out: branch.npz + branch.json (the branch, gfbjax.cont.Branch.load; plain numpy + json; the JSON
+records the system spec and its conventions, the grid, the component names, units and the rpm conversion),
 cycles.json (summary: special points with speed, rpm, multipliers' moduli, NS angle; why the branch ended;
 counts; timings), cycles_bifurcation.png (max/min of the journal y_j and x_j against speed, stable solid,
 unstable dashed, special points marked) and cycles_multipliers.png (Floquet multipliers and unit circle).
@@ -55,8 +57,9 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
     n = p.add_argument_group("numerics")
     n.add_argument("--m", type=int, default=4, metavar="M",
-                   help="collocation points per mesh interval, 2..7 (default 4)")
-    n.add_argument("--N", type=int, default=16, metavar="N", help="collocation mesh intervals, >= 2 (default 16)")
+                   help=f"collocation points per mesh interval, in {limits.COLLOCATION_M.interval()} (default 4)")
+    n.add_argument("--N", type=int, default=16, metavar="N",
+                   help=f"collocation mesh intervals, in {limits.MESH_N.interval()} (default 16)")
     n.add_argument("--ds", type=float, default=10.0, help="initial arclength step (default 10; the first speed "
                    "step is also capped by --dlam-max)")
     n.add_argument("--ds-max", type=float, default=20.0, help="largest arclength step (default 20)")
@@ -77,8 +80,8 @@ def _settings(args: argparse.Namespace):
     from ...analyses.cycles import default_cycle_settings
 
     check_continuation_options(args)
-    check_option("--m", args.m, 2, 7, what="collocation points per interval")
-    check_option("--N", args.N, 2, 10**5, what="mesh intervals")
+    check_range("--m", args.m, limits.COLLOCATION_M)
+    check_range("--N", args.N, limits.MESH_N)
     check_option("--dlam-max", args.dlam_max, 0.0, None, lo_open=True, what="speed change per step")
     try:
         return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
@@ -108,18 +111,18 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
 
     out = []
     for s in branch.special:
-        mu = np.asarray(s.get("multipliers") if s.get("multipliers") is not None else [], complex)
+        mu = np.asarray(s.spectrum, complex)
         crit = nontrivial(mu, 1) if mu.size else mu
         crit = crit[np.argsort(-np.abs(crit))] if crit.size else crit
-        lam = float(s["lam"])
+        lam = float(s.lam)
         d: dict[str, Any] = {
-            "type": s["type"], "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.get("period"),
-            "located": bool(s.get("located", False)), "index": s.get("index"),
+            "type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.period,
+            "located": bool(s.located), "residual": s.residual if s.located else None, "index": s.index,
             "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
             "critical_multipliers": [[float(z.real), float(z.imag)] for z in crit[:2]],
         }
-        if s["type"] == "NS" and s.get("angle") is not None:
-            a = float(s["angle"])
+        if s.type == "NS" and s.angle is not None:
+            a = float(s.angle)
             d["ns_angle_rad"] = a
             d["ns_angle_deg"] = math.degrees(a)
             # the second frequency of the torus, as a multiple of the running frequency (modulo 1)
@@ -192,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
     bar = _SpeedBar(args.start, args.end, not args.quiet)
     t1 = time.perf_counter()
     try:
-        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar)
+        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar, spec=spec)
     except RuntimeError as exc:  # no static equilibrium at the start speed
         bar.close()
         print(f"gfbjax cycles: {exc}", flush=True)
@@ -208,7 +211,7 @@ def run(args: argparse.Namespace) -> int:
         f"  branch            {len(branch)} points ({n_stable} stable, {len(branch) - n_stable} unstable), "
         f"Omega_bar {float(branch.lam[0]) if len(branch) else math.nan:.4f} -> "
         f"{float(branch.lam[-1]) if len(branch) else math.nan:.4f}",
-        f"  ended             {branch.reason}" + ("" if ok else "  (before the end of the range)"),
+        f"  ended             {branch.outcome}: {branch.message}" + ("" if ok else "  (before the end of the range)"),
         f"  time              continuation {t_cont:.1f} s"
         + (f" ({t_cont / max(len(branch), 1):.2f} s per point)" if len(branch) else ""),
         format_table(rows),
@@ -220,9 +223,6 @@ def run(args: argparse.Namespace) -> int:
     figures: list[str] = []
     t2 = time.perf_counter()
     if not args.no_figures and len(branch):
-        import matplotlib
-
-        matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from ...plot.branch import plot_bifurcation, plot_multipliers
@@ -245,7 +245,7 @@ def run(args: argparse.Namespace) -> int:
         "range": {"start": args.start, "end": args.end, "reached_end": ok},
         "settings": {"m": settings.m, "N": settings.N, "ds": settings.ds, "ds_max": settings.ds_max,
                      "dlam_max": settings.dlam_max, "max_points": settings.max_points, "locate": settings.locate},
-        "reason": branch.reason,
+        "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "unstable": len(branch) - n_stable,
                    "special": len(rows), **{k: sum(1 for d in rows if d["type"] == k) for k in ("LPC", "PD", "NS")}},
         "lam_first": float(branch.lam[0]) if len(branch) else None,

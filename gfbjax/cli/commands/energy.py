@@ -92,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
     t1 = time.perf_counter()
     progress = _cycles._SpeedBar(args.start, args.end, not args.quiet)
     try:
-        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=progress)
+        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=progress,
+                                     spec=spec)
     except RuntimeError as exc:  # no static equilibrium at the start speed: nothing to write
         print(f"gfbjax energy: {exc}", flush=True)
         return 1
@@ -110,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     t_energy = time.perf_counter() - t2
     lam = np.asarray(branch.lam, float)
     stable = np.asarray(branch.stable, bool)
-    ns = [float(s["lam"]) for s in branch.special_of("NS")]
+    ns = [s.lam for s in branch.special_of("NS")]
     zc = sign_changes(lam, E.W_cb)
     ident = identity_error(E.W_fu, E.W_B)
 
@@ -119,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
 
     n_stable = int(np.sum(stable))
     print("\n".join([
-        f"  branch            {len(branch)} points ({n_stable} stable), ended: {branch.reason}"
+        f"  branch            {len(branch)} points ({n_stable} stable), ended: {branch.outcome} ({branch.message})"
         + ("" if ok else "  (before the end of the range)"),
         f"  NS speeds         {speeds(ns)}",
         "  W_cb sign changes " + (", ".join(f"{c['Omega_bar']:.4f} ({c['from']} -> {'-' if c['from'] == '+' else '+'})"
@@ -130,9 +131,6 @@ def run(args: argparse.Namespace) -> int:
 
     figures: list[str] = []
     if not args.no_figures and len(branch):
-        import matplotlib
-
-        matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from ...plot.branch import plot_energy
@@ -143,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         figures.append("energy.png")
 
     data = {
-        "command": NAME, "gfbjax_version": gfbjax.__version__, "reason": branch.reason,
+        "command": NAME, "gfbjax_version": gfbjax.__version__, "outcome": str(branch.outcome), "message": branch.message,
         "range": {"start": args.start, "end": args.end, "reached_end": ok},
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
         "settings": {k: getattr(settings, k) for k in ("m", "N", "ds", "ds_max", "dlam_max", "max_points",

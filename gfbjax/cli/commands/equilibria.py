@@ -20,7 +20,8 @@ pseudo-arclength steps, with the eigenvalues of the Jacobian at every point; Hop
 the imaginary axis: onset of the self-excited sub-synchronous whirl, where the self-excited cycles start) and
 folds are detected and located (unless --no-locate).
 
-Writes to --out: branch.npz + branch.json (gfbjax.cont.Branch.load; plain numpy + json), equilibria.json
+Writes to --out: branch.npz + branch.json (gfbjax.cont.Branch.load; plain numpy + json; the JSON records the
+system spec, grid, units and rpm conversion), equilibria.json
 (the Hopf/fold points: Omega_bar, rpm, the Hopf frequency omega per tau and in Hz and the whirl ratio
 omega/Omega_bar; why the branch ended; timings) and equilibria.png (journal position and the real part of the
 critical eigenvalue against speed).
@@ -82,15 +83,13 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
 
     out = []
     for s in branch.special:
-        lam = float(s["lam"])
-        d: dict[str, Any] = {"type": s["type"], "Omega_bar": lam, "rpm": spec.rpm(lam),
-                             "located": bool(s.get("located", False)), "index": s.get("index")}
-        ev = s.get("multipliers")
-        if ev is not None:
-            ev = np.asarray(ev, complex)
-            d["max_real_part"] = float(ev.real.max()) if ev.size else None
-        if s["type"] == "HOPF" and s.get("angle") is not None:
-            w = float(s["angle"])
+        lam = float(s.lam)
+        d: dict[str, Any] = {"type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "located": bool(s.located),
+                             "residual": s.residual if s.located else None, "index": s.index}
+        ev = np.asarray(s.spectrum, complex)
+        d["max_real_part"] = float(ev.real.max()) if ev.size else None
+        if s.type == "HOPF" and s.omega is not None:
+            w = float(s.omega)
             d["omega_per_tau"] = w
             d["frequency_hz"] = w / spec.t_star / (2 * math.pi)
             d["whirl_ratio"] = w / lam
@@ -124,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
 
     t1 = time.perf_counter()
     try:
-        branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb)
+        branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb, spec=spec)
     except RuntimeError as exc:
         print(f"gfbjax equilibria: {exc}", flush=True)
         return 1
@@ -137,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         f"  branch            {len(branch)} points ({n_stable} stable), Omega_bar "
         f"{float(branch.lam[0]) if len(branch) else math.nan:.4f} -> "
         f"{float(branch.lam[-1]) if len(branch) else math.nan:.4f}",
-        f"  ended             {branch.reason}" + ("" if ok else "  (before the end of the range)"),
+        f"  ended             {branch.outcome}: {branch.message}" + ("" if ok else "  (before the end of the range)"),
         f"  time              continuation {t_cont:.1f} s",
     ]
     if not rows:
@@ -156,9 +155,6 @@ def run(args: argparse.Namespace) -> int:
     if hopf is not None and not args.no_figures:
         figures.append("hopf_cycles.png")
     if not args.no_figures and len(branch):
-        import matplotlib
-
-        matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from ...plot.branch import plot_equilibria
@@ -172,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
         "command": NAME, "gfbjax_version": gfbjax.__version__,
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
         "range": {"start": args.start, "end": args.end, "reached_end": ok},
-        "reason": branch.reason,
+        "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "HOPF": sum(d["type"] == "HOPF" for d in rows),
                    "FOLD": sum(d["type"] == "FOLD" for d in rows)},
         "special": rows,
@@ -195,9 +191,9 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     s = default_cycle_settings(ds=0.02, ds_max=2.0, dlam_max=0.005, max_points=args.hopf_cycles, lam_min=lo,
                                lam_max=hi)
     t0 = time.perf_counter()
-    cyc = continue_gfb_hopf_cycles(params, branch, 0, s, progress=not args.quiet)
+    cyc = continue_gfb_hopf_cycles(params, branch, 0, s, progress=not args.quiet, spec=spec)
     cyc.save(out / "hopf_cycles")
-    lam_h = float(branch.special_of("HOPF")[0]["lam"])
+    lam_h = float(branch.special_of("HOPF")[0].lam)
     amp = (cyc.xmax - cyc.xmin)[:, :2] / 2 if len(cyc) else np.zeros((0, 2))
     crit = hopf_criticality(cyc, lam_h)
     past = [i for i in range(len(cyc)) if cyc.stable[i] and cyc.lam[i] > lam_h]
@@ -206,19 +202,16 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
         i = past[0]
         first_past = {"Omega_bar": float(cyc.lam[i]), "rpm": spec.rpm(float(cyc.lam[i])),
                       "amplitude_xj_c": float(amp[i, 0]), "amplitude_yj_c": float(amp[i, 1])}
-    summary = {"criticality": crit, "points": len(cyc), "reason": cyc.reason,
-               "special": [{"type": sp["type"], "Omega_bar": float(sp["lam"]), "rpm": spec.rpm(float(sp["lam"]))}
+    summary = {"criticality": crit, "points": len(cyc), "outcome": str(cyc.outcome), "message": cyc.message,
+               "special": [{"type": sp.type, "Omega_bar": sp.lam, "rpm": spec.rpm(sp.lam), "located": sp.located}
                            for sp in cyc.special],
                "first_stable_cycle_past_hopf": first_past, "seconds": time.perf_counter() - t0}
-    line = f"  Hopf cycles       {crit}, {len(cyc)} points ({cyc.reason})"
+    line = f"  Hopf cycles       {crit}, {len(cyc)} points ({cyc.outcome}: {cyc.message})"
     if first_past:
         line += (f"; first stable cycle past the Hopf speed at {first_past['rpm']:.0f} rpm: amplitude "
                  f"x {first_past['amplitude_xj_c']:.3f} c, y {first_past['amplitude_yj_c']:.3f} c")
     print(line, flush=True)
     if not args.no_figures and len(cyc):
-        import matplotlib
-
-        matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from ...plot.branch import plot_bifurcation

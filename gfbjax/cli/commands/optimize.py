@@ -8,8 +8,10 @@ import argparse
 import time
 from typing import Any
 
+from ... import limits
 from ...params import ParameterError
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_summary
+from ._common import (add_system_options, check_option, check_range, output_dir, spec_from_args, traced_params,
+                      write_summary)
 
 NAME = "optimize"
 
@@ -18,12 +20,11 @@ NAME = "optimize"
 OBJECTIVES = ("W_cb", "max_mu")
 METHODS = ("gradient", "adam", "pattern")
 DEFAULT_STEP = 0.025
-OMEGA_MAX = 50.0
 
 DESCRIPTION = """\
 Optimisation of the bump foil, compliance alpha_f and structural loss factor eta, for the synchronous (1X) limit
-cycle of the unbalanced rotor (paper Sect. 3.3, Appendix A2), inside the paper's bounds 0.005 <= alpha_f <= 2,
-1e-4 <= eta <= 10.  Objectives (--objective):
+cycle of the unbalanced rotor (paper Sect. 3.3, Appendix A2), inside the paper's bounds alpha_f in {a},
+eta in {e}.  Objectives (--objective):
 
   max_mu  minimise the largest non-trivial Floquet multiplier modulus (OBJ2; < 1: stable cycle),
   W_cb    maximise the net energy the gas films dissipate per cycle (OBJ1; the paper minimises 1/W_cb).
@@ -43,7 +44,7 @@ journal orbit's extent and the multipliers; the last speed with a stable optimis
 (paper Figs. 16-19).
 Exit status: 0 on success (one speed: an optimum found; continuation: --end reached), 1 when no cycle converged
 or the march ended early (everything computed is still written), 2 for invalid input.
-"""
+""".format(a=limits.DESIGN_ALPHA_F.interval(), e=limits.DESIGN_ETA.interval())
 
 EPILOG = """\
 units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); W_cb in p0 R L c per cycle;
@@ -71,21 +72,24 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="gradient: projected quasi-Newton with exact gradients; adam: optax Adam; pattern: the "
                         "paper's pattern search (default %(default)s)")
     g.add_argument("--x0", nargs=2, type=float, default=None, metavar=("ALPHA_F", "ETA"),
-                   help="start foil, inside 0.005 <= alpha_f <= 2 and 1e-4 <= eta <= 10 (default: the system's "
-                        "own alpha_f and eta)")
+                   help=f"start foil, alpha_f in {limits.DESIGN_ALPHA_F.interval()} and eta in "
+                        f"{limits.DESIGN_ETA.interval()} (default: the system's own alpha_f and eta)")
     g.add_argument("--max-evals", type=int, default=None, metavar="E",
                    help="most cycle evaluations per speed, >= 1 (default: none; the optimiser's own stopping rules)")
     s = p.add_argument_group("speed: one speed (--speed) or an optimised continuation (--start, --end, --step)")
     s.add_argument("--speed", type=float, default=None, metavar="OMEGA_BAR",
-                   help=f"optimise at this speed, in (0, {OMEGA_MAX:g}]")
+                   help=f"optimise at this speed, in {limits.SPEED.interval()}")
     s.add_argument("--start", type=float, default=None, metavar="OMEGA_BAR", help="first speed of the continuation")
     s.add_argument("--end", type=float, default=None, metavar="OMEGA_BAR",
-                   help=f"last speed of the continuation, above --start, at most {OMEGA_MAX:g}")
+                   help=f"last speed of the continuation, above --start, at most {limits.SPEED.hi:g}")
     s.add_argument("--step", type=float, default=None, metavar="D_OMEGA",
-                   help=f"speed step of the continuation, in (0, 1] (default {DEFAULT_STEP:g})")
+                   help=f"speed step of the continuation, in {limits.SPEED_STEP.interval()} "
+                        f"(default {DEFAULT_STEP:g})")
     n = p.add_argument_group("numerics (the collocation mesh of every cycle, as in gfbjax cycles)")
-    n.add_argument("--m", type=int, default=4, metavar="M", help="Gauss points per mesh interval, 2..7 (default 4)")
-    n.add_argument("--N", type=int, default=16, metavar="N", help="mesh intervals over the period, >= 2 (default 16)")
+    n.add_argument("--m", type=int, default=4, metavar="M",
+                   help=f"Gauss points per mesh interval, in {limits.COLLOCATION_M.interval()} (default 4)")
+    n.add_argument("--N", type=int, default=16, metavar="N",
+                   help=f"mesh intervals over the period, in {limits.MESH_N.interval()} (default 16)")
     o = p.add_argument_group("output")
     o.add_argument("--no-figures", action="store_true", help="no PNG figure")
     o.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -95,18 +99,16 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 def check_options(args: argparse.Namespace, spec: Any) -> tuple[float, float]:
     """Check every option before any computation (ParameterError naming the option); returns the start foil."""
-    from ...design.evaluate import FOIL_BOUNDS
-
-    check_option("--m", args.m, 2, 7, what="collocation points per interval")
-    check_option("--N", args.N, 2, 10**5, what="mesh intervals")
+    check_range("--m", args.m, limits.COLLOCATION_M)
+    check_range("--N", args.N, limits.MESH_N)
     if args.max_evals is not None:
-        check_option("--max-evals", args.max_evals, 1, 10**6, what="cycle evaluations per speed")
+        check_option("--max-evals", args.max_evals, 1, 10**6, what="cycle evaluations per speed", integer=True)
     continuation = args.start is not None or args.end is not None or args.step is not None
     if args.speed is not None:
         if continuation:
             raise ParameterError("--speed: give either --speed (one speed) or --start/--end/--step "
                                  "(continuation), not both")
-        check_option("--speed", args.speed, 0.0, OMEGA_MAX, lo_open=True, what="Omega_bar")
+        check_range("--speed", args.speed, limits.SPEED)
     else:
         if not continuation:
             raise ParameterError("--speed: give --speed OMEGA_BAR (one speed) or both --start and --end "
@@ -114,15 +116,13 @@ def check_options(args: argparse.Namespace, spec: Any) -> tuple[float, float]:
         for opt, value in (("--start", args.start), ("--end", args.end)):
             if value is None:
                 raise ParameterError(f"{opt}: the optimised continuation needs both --start and --end")
-        check_option("--start", args.start, 0.0, OMEGA_MAX, lo_open=True, what="Omega_bar")
-        check_option("--end", args.end, args.start, OMEGA_MAX, lo_open=True, what="Omega_bar, above --start")
-        check_option("--step", DEFAULT_STEP if args.step is None else args.step, 0.0, 1.0, lo_open=True,
-                     what="speed step")
+        check_range("--start", args.start, limits.SPEED)
+        check_range("--end", args.end, limits.SPEED.with_bounds(lo=args.start, what="Omega_bar, above --start"))
+        check_range("--step", DEFAULT_STEP if args.step is None else args.step, limits.SPEED_STEP)
     x0 = (spec.alpha_f, spec.eta) if args.x0 is None else tuple(args.x0)
     whose = "" if args.x0 is not None else "the system's own "
-    for k, name in enumerate(("alpha_f", "eta")):
-        lo, hi = FOIL_BOUNDS[name]
-        check_option("--x0", x0[k], lo, hi, what=f"{whose}{name}, paper Appendix A2")
+    for k, rng in enumerate((limits.DESIGN_ALPHA_F, limits.DESIGN_ETA)):
+        check_range("--x0", x0[k], rng.with_bounds(what=f"{whose}{rng.name}, {rng.what}"))
     return float(x0[0]), float(x0[1])
 
 
@@ -133,10 +133,6 @@ def run(args: argparse.Namespace) -> int:
     out = output_dir(args)
     params = traced_params(spec)
     options = {} if args.max_evals is None else {"max_evals": args.max_evals}
-    if not args.no_figures:
-        import matplotlib
-
-        matplotlib.use("Agg")
     where = (f"Omega_bar {args.speed:g}" if args.speed is not None else
              f"Omega_bar {args.start:g} -> {args.end:g} step {args.step or DEFAULT_STEP:g}")
     print(f"gfbjax optimize: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={args.N} "
@@ -205,6 +201,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
 
 
 def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
+    from ...cont import Outcome
     from ...design.schedule import optimized_continuation
 
     step = DEFAULT_STEP if args.step is None else args.step
@@ -220,7 +217,7 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
         "  schedule", *lines,
         "  stable up to      " + (f"Omega_bar = {free:.4f} ({spec.rpm(free):.0f} rpm)" if free is not None
                                    else "none (no stable optimised cycle)"),
-        f"  ended             {sched.reason}",
+        f"  ended             {sched.outcome}: {sched.message}",
         f"  cost              {sched.n_solves} cycle solves, {sched.n_gradients} gradients, {sched.seconds:.1f} s",
     ]), flush=True)
     fig = None
@@ -232,7 +229,7 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
                                   f"Nz={spec.Nz}, N={args.N}, m={args.m}; x: unstable)")
     data = {**meta, "range": {"start": args.start, "end": args.end, "step": step}, **sched.to_dict()}
     _finish(out, "schedule", data, fig, t0)
-    return 0 if sched.reason.startswith("reached") else 1
+    return 0 if sched.outcome is Outcome.REACHED_END else 1
 
 
 def _plot_optimum(hist: Any, x0: tuple[float, float], opt: Any, args: argparse.Namespace, spec: Any):

@@ -4,16 +4,16 @@ where sub-synchronous components appear."""
 
 from __future__ import annotations
 
-import os
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from typing import Any
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")  # multi-threaded LAPACK on ~300x300 LUs only costs (see transient)
-
-import argparse  # noqa: E402
-import math  # noqa: E402
-import time  # noqa: E402
-from typing import Any  # noqa: E402
-
-from ._common import add_system_options, check_option, output_dir, spec_from_args, traced_params, write_json  # noqa: E402
+from ... import limits
+from ...params import ParameterError, SystemSpec
+from ._common import add_system_options, check_range, output_dir, spec_from_args, traced_params, write_json
 
 NAME = "runup"
 
@@ -50,9 +50,11 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
     a = r.add_mutually_exclusive_group()
     a.add_argument("--revs", type=float, default=None, metavar="N",
-                   help="revolutions from start to end speed, sets the acceleration (default 400)")
+                   help="revolutions from start to end speed, sets the acceleration (default 400; in "
+                        f"{limits.REVOLUTIONS.interval()})")
     a.add_argument("--accel", type=float, default=None, metavar="A_BAR",
-                   help="angular acceleration per tau^2 (sign from the direction of the run)")
+                   help=f"angular acceleration per tau^2, |A_BAR| in {limits.ACCEL.interval()}: positive for a "
+                        f"run-up, negative for a coast-down; at most {limits.REVOLUTIONS.hi:g} revolutions")
     r.add_argument("--settle-revs", type=float, default=20.0, metavar="N",
                    help="revolutions at the start speed before the run-up, so that the start transient has "
                         "decayed (default 20; 0 = none)")
@@ -72,7 +74,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="... and above this absolute amplitude over c (default 1e-3)")
     o.add_argument("--cycles", default=None, metavar="BRANCH",
                    help="overlay the max/min of the limit cycles of a branch file written by 'gfbjax cycles' "
-                        "(e.g. results/cycles/branch.npz) on the run-up figure, as in the paper's Fig. 7a/b")
+                        "(e.g. results/cycles/branch.npz) on the run-up figure, as in the paper's Fig. 7a/b; the "
+                        "branch must be of the same system (its grid --nx/--nz may differ)")
     o.add_argument("--no-figures", action="store_true", help="no PNG figures")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -85,36 +88,27 @@ def run(args: argparse.Namespace) -> int:
     import gfbjax
 
     from ...analyses.signals import runup_stft, subsynchronous
-    from ...analyses.transient import TransientSettings, default_initial_state, run_up, simulate
+    from ...analyses.transient import default_initial_state, run_up, simulate
 
     t_start = time.perf_counter()
     spec = spec_from_args(args)
-    check_option("--start", args.start, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    check_option("--end", args.end, 0.0, 50.0, lo_open=True, what="Omega_bar")
-    if args.start == args.end:
-        check_option("--end", args.end, args.start, args.start, lo_open=True, what="must differ from --start")
-    if args.revs is not None:
-        check_option("--revs", args.revs, 0.0, 1e6, lo_open=True, what="revolutions")
-    check_option("--settle-revs", args.settle_revs, 0.0, 1e5, what="revolutions")
-    overlay = _cycle_overlay(args.cycles)  # read before the long integration: a bad file fails fast
-    settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
-                                 samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
-    out = output_dir(args)
     params = traced_params(spec)
+    settings, settle_revs, revs = _check_run(args, params)
+    overlay = _cycle_overlay(args.cycles, spec, args.system)  # before the long integration: a bad file fails fast
+    out = output_dir(args)
     progress = not args.quiet
 
     s0, note = default_initial_state(params, args.start)
     print(f"gfbjax runup: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, Omega_bar {args.start:g} -> "
           f"{args.end:g}; {note}", flush=True)
-    if args.settle_revs > 0:
-        settle = simulate(params, args.start, revolutions=float(round(args.settle_revs)), s0=s0, settings=settings,
+    if settle_revs > 0:
+        settle = simulate(params, args.start, revolutions=settle_revs, s0=s0, settings=settings,
                           progress=progress)
         if settle.outcome != "completed":
             print(f"  settling at the start speed ended: {settle.message}", flush=True)
             settle.save(out / "runup.npz")
             return 1
         s0 = settle.final_state
-    revs = 400.0 if (args.revs is None and args.accel is None) else args.revs
     res = run_up(params, args.start, args.end, accel=args.accel, revolutions=revs, s0=s0, settings=settings,
                  progress=progress)
     res.save(out / "runup.npz")
@@ -149,9 +143,6 @@ def run(args: argparse.Namespace) -> int:
 
     figures = []
     if not args.no_figures:
-        import matplotlib
-
-        matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from ...plot.transient import plot_runup, plot_spectrogram
@@ -180,18 +171,111 @@ def run(args: argparse.Namespace) -> int:
     return 0 if res.outcome == "completed" else 1
 
 
-def _cycle_overlay(path: str | None) -> dict | None:
-    """Max/min of the journal displacement of a saved cycle branch, in the form ``plot_runup`` takes."""
+def _check_run(args: argparse.Namespace, params: Any) -> tuple[Any, float, float | None]:
+    """Check every option of the run before any computation (speeds, --revs or --accel with its sign and the
+    revolutions it implies, --settle-revs, the solver settings, the memory of the saved samples).  Returns the
+    settings, the settling revolutions (whole) and the run-up revolutions (None with --accel)."""
+    from ...analyses.transient import TransientSettings, check_run_up, check_simulate
+
+    for opt, value in (("--start", args.start), ("--end", args.end)):
+        check_range(opt, value, limits.SPEED)
+    if args.start == args.end:
+        raise ParameterError(f"--end = {args.end:g} must differ from --start (a run-up or a coast-down)")
+    if args.revs is not None:
+        check_range("--revs", args.revs, limits.REVOLUTIONS)
+    settle_revs = float(round(check_range("--settle-revs", args.settle_revs, limits.SETTLE_REVOLUTIONS)))
+    settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
+                                 samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
+    revs = 400.0 if (args.revs is None and args.accel is None) else args.revs
+    try:
+        check_run_up(params, args.start, args.end, accel=args.accel, revolutions=revs, settings=settings)
+    except ParameterError as exc:  # name the option: "accel = 0 ..." -> "--accel = 0 ...", "|accel|" likewise
+        msg = str(exc)
+        for name in ("accel", "|accel|"):
+            if msg.startswith(f"{name} "):
+                msg = name.replace("accel", "--accel") + msg[len(name):]
+        raise ParameterError(msg) from None
+    if settle_revs > 0:
+        check_simulate(params, args.start, revolutions=settle_revs, settings=settings)
+    return settings, settle_revs, revs
+
+
+def _cycle_overlay(path: str | None, spec: SystemSpec, system: str = "") -> dict | None:
+    """Max/min of the journal displacement of a saved cycle branch, in the form ``plot_runup`` takes.
+
+    The file is read with :meth:`gfbjax.cont.Branch.load`; a missing, corrupt or foreign file, a branch that is
+    not of cycles or does not record x_j, y_j first, and a branch computed for another system are ParameterErrors
+    naming ``--cycles`` (exit 2).  "Another system": any field of the branch's recorded SystemSpec other than
+    the grid (Nx, Nz) differs from ``spec``, the unbalance compared as the eccentricity e_u that G and omega_r
+    (or e_u) give, since the overlay compares the physics and a branch on a coarser grid is a fair reference.  A
+    branch with only the dimensionless groups recorded (computed without ``spec``) is compared on those.  A
+    branch that records no system (written by an older gfbjax) is accepted with a warning on stderr."""
     if path is None:
         return None
-    from ...cont import Branch
-    from ...params import ParameterError
+    from ...cont import Branch, BranchFileError
 
     try:
         b = Branch.load(path)
-    except (OSError, ValueError, KeyError) as e:
-        raise ParameterError(f"--cycles {path}: not a readable branch file ({e})") from e
+    except BranchFileError as exc:
+        raise ParameterError(f"--cycles: {exc}") from None
     if b.kind != "cycles":
         raise ParameterError(f"--cycles {path}: branch kind is {b.kind!r}, expected 'cycles'")
+    if b.xmax.shape[1] < 2 or (b.component_names is not None and list(b.component_names[:2]) != ["x_j", "y_j"]):
+        raise ParameterError(f"--cycles {path}: the branch does not record the journal x_j, y_j first "
+                             f"(components {b.component_names or b.components})")
+    diffs = _system_differences(b.meta, spec)
+    if diffs is None:
+        print(f"gfbjax runup: warning: --cycles {path} records no system (written by an older gfbjax?): it is "
+              f"overlaid unchecked on the run-up of system '{system}'", file=sys.stderr, flush=True)
+    elif diffs:
+        raise ParameterError(f"--cycles {path}: the branch was computed for another system than '{system}': "
+                             + "; ".join(diffs) + " (only the grid Nx, Nz may differ)")
     return {"speed": b.lam, "stable": b.stable, "x_max": b.xmax[:, 0], "x_min": b.xmin[:, 0],
             "y_max": b.xmax[:, 1], "y_min": b.xmin[:, 1]}
+
+
+_GRID_FIELDS = ("Nx", "Nz")
+_UNBALANCE_FIELDS = ("G", "e_u", "omega_r")  # compared through the eccentricity they give
+
+
+def _system_differences(meta: dict, spec: SystemSpec) -> list[str] | None:
+    """``"field = branch value (branch) vs run-up value (run-up)"`` for each physical difference between the
+    system a branch records in its meta and ``spec``; None when the meta records no system."""
+    recorded = meta.get("spec")
+    if isinstance(recorded, dict):
+        mine = spec.to_dict()
+        diffs = [f"{name} = {recorded.get(name)!r} (branch) vs {mine.get(name)!r} (run-up)"
+                 for name in sorted(set(mine) | set(recorded))
+                 if name not in _GRID_FIELDS + _UNBALANCE_FIELDS and not _same(recorded.get(name), mine.get(name))]
+        e_branch = _eccentricity(recorded)
+        if not _same(e_branch, spec.eccentricity_u):
+            diffs.append(f"unbalance e_u = {e_branch!r} m (branch: G = {recorded.get('G')!r}, e_u = "
+                         f"{recorded.get('e_u')!r}) vs {spec.eccentricity_u!r} m (run-up)")
+        return diffs
+    groups = meta.get("params")
+    if isinstance(groups, dict):
+        params = spec.nondim()
+        mine = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+        mine = {k: v if isinstance(v, (str, int)) else float(v) for k, v in mine.items()}  # 0-d arrays -> float
+        return [f"Params.{name} = {groups.get(name)!r} (branch) vs {mine.get(name)!r} (run-up)"
+                for name in sorted(set(mine) | set(groups))
+                if name not in _GRID_FIELDS and not _same(groups.get(name), mine.get(name))]
+    return None
+
+
+def _eccentricity(recorded: dict) -> float | None:
+    """The unbalance eccentricity e_u [m] of a recorded spec dict (e_u, else G / omega_r); None if unreadable."""
+    e_u, G, omega_r = recorded.get("e_u"), recorded.get("G"), recorded.get("omega_r")
+    if isinstance(e_u, (int, float)):
+        return float(e_u)
+    if isinstance(G, (int, float)) and isinstance(omega_r, (int, float)) and omega_r > 0:
+        return G * 1e-3 / omega_r
+    return None
+
+
+def _same(a: object, b: object) -> bool:
+    """Equal, numbers to 1e-9 relative (a JSON round trip is exact; derived values such as e_u may not be)."""
+    numbers = (int, float)
+    if isinstance(a, numbers) and isinstance(b, numbers) and not isinstance(a, bool) and not isinstance(b, bool):
+        return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-300)
+    return a == b

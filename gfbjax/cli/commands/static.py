@@ -10,10 +10,11 @@ import sys
 import time
 from typing import Any
 
+from ... import limits
 from ...params import ParameterError, SystemSpec
 from ._common import (
     add_system_options,
-    check_option,
+    check_range,
     float_list,
     output_dir,
     spec_from_args,
@@ -26,8 +27,6 @@ DEFAULT_SPEED = 0.4
 DEFAULT_ALPHAS = [0.01, 0.1, 1.0]
 DEFAULT_SPEEDS = [0.2, 0.4, 0.6]
 DEFAULT_LOADS = [0.0, 0.1, 0.2, 0.4, 0.8]
-OMEGA_MAX = 50.0
-W_MAX = 20.0
 
 DESCRIPTION = """\
 Static equilibrium of the balanced rotor (no unbalance) on its two gas foil bearings at one speed, under gravity
@@ -63,28 +62,28 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     op = p.add_argument_group("operating point")
     sp = op.add_mutually_exclusive_group()
     sp.add_argument("--speed", type=float, default=None, metavar="OMEGA_BAR",
-                    help=f"dimensionless speed Omega_bar in (0, {OMEGA_MAX:g}] (default {DEFAULT_SPEED:g})")
+                    help=f"dimensionless speed Omega_bar in {limits.SPEED.interval()} (default {DEFAULT_SPEED:g})")
     sp.add_argument("--rpm", type=float, default=None, metavar="RPM",
                     help="shaft speed in rev/min, converted with the system's time scale t*")
     ld = op.add_mutually_exclusive_group()
     ld.add_argument("--load", type=float, default=None, metavar="NEWTON",
                     help="extra vertical (downward) load per bearing in N, beyond gravity (default 0)")
     ld.add_argument("--w", type=float, default=None, metavar="W_BAR",
-                    help=f"extra specific load per bearing W/(p0 L D) in [0, {W_MAX:g}], beyond gravity "
+                    help=f"extra specific load per bearing W/(p0 L D) in {limits.LOAD_W.interval()}, beyond gravity "
                          "(default 0); the system's own 'load' field is added to either")
 
     cv = p.add_argument_group("load-displacement curves and loci (paper Figs. 4-5)")
     cv.add_argument("--curves", action="store_true",
                     help="also compute the load-displacement curves and equilibrium loci and plot them")
-    cv.add_argument("--alphas", type=float_list("--alphas", 0.0, 100.0, lo_open=True, what="alpha_f"),
+    cv.add_argument("--alphas", type=float_list("--alphas", limits.ALPHA_F),
                     default=DEFAULT_ALPHAS, metavar="A1,A2,...",
                     help="foil compliances alpha_f, one panel each (default: %s)"
                          % ",".join(f"{v:g}" for v in DEFAULT_ALPHAS))
-    cv.add_argument("--speeds", type=float_list("--speeds", 0.0, OMEGA_MAX, lo_open=True, what="Omega_bar"),
+    cv.add_argument("--speeds", type=float_list("--speeds", limits.SPEED),
                     default=DEFAULT_SPEEDS, metavar="S1,S2,...",
                     help="dimensionless speeds Omega_bar, one curve each (default: %s)"
                          % ",".join(f"{v:g}" for v in DEFAULT_SPEEDS))
-    cv.add_argument("--loads", type=float_list("--loads", 0.0, W_MAX, increasing=True, what="W/(p0 L D)"),
+    cv.add_argument("--loads", type=float_list("--loads", limits.LOAD_W, increasing=True),
                     default=DEFAULT_LOADS, metavar="W1,W2,...",
                     help="increasing specific loads W/(p0 L D) beyond gravity along each curve (default: %s); "
                          "a curve stops at the first load whose film closes" % ",".join(f"{v:g}" for v in DEFAULT_LOADS))
@@ -109,25 +108,25 @@ def _force_unit(spec: SystemSpec) -> float:
 
 def _operating_point(args: argparse.Namespace, spec: SystemSpec) -> tuple[float, float, float]:
     """(omega_bar, extra specific load w from the options, total extra specific load incl. spec.load)."""
-    if args.rpm is not None:
-        check_option("--rpm", args.rpm, 0.0, None, lo_open=True, what="rev/min")
-        omega = spec.omega_bar(args.rpm)
-        check_option("--rpm", args.rpm, 0.0, spec.rpm(OMEGA_MAX), lo_open=True,
-                     what=f"rev/min; Omega_bar = {omega:.4g} must not exceed {OMEGA_MAX:g}")
+    if args.rpm is not None:  # the speed range in rev/min of this system
+        rpm_range = limits.SPEED.with_bounds(lo=spec.rpm(limits.SPEED.lo), hi=spec.rpm(limits.SPEED.hi),
+                                             unit="rev/min", what=f"Omega_bar in {limits.SPEED.interval()}")
+        omega = spec.omega_bar(check_range("--rpm", args.rpm, rpm_range))
     else:
-        omega = DEFAULT_SPEED if args.speed is None else args.speed
-        check_option("--speed", omega, 0.0, OMEGA_MAX, lo_open=True, what="dimensionless speed Omega_bar")
+        omega = check_range("--speed", DEFAULT_SPEED if args.speed is None else args.speed, limits.SPEED)
     fu = _force_unit(spec)
-    if args.load is not None:
-        check_option("--load", args.load, 0.0, W_MAX * fu, what="N per bearing")
-        w_opt = args.load / fu
+    if args.load is not None:  # the specific-load range in N per bearing
+        load_range = limits.LOAD_W.with_bounds(hi=limits.LOAD_W.hi * fu, unit="N",
+                                               what=f"per bearing; W/(p0 L D) in {limits.LOAD_W.interval()}")
+        w_opt = check_range("--load", args.load, load_range) / fu
     elif args.w is not None:
-        w_opt = check_option("--w", args.w, 0.0, W_MAX, what="specific load W/(p0 L D)")
+        w_opt = check_range("--w", args.w, limits.LOAD_W)
     else:
         w_opt = 0.0
     w = w_opt + spec.load / fu
-    if w > W_MAX:
-        raise ParameterError(f"load: the total extra specific load {w:g} (option + system 'load') exceeds {W_MAX:g}")
+    if not limits.LOAD_W.contains(w):
+        raise ParameterError(f"load: the total extra specific load {w:g} (option + system 'load') is outside the "
+                             f"allowed range {limits.LOAD_W.interval()}")
     return float(omega), float(w_opt), float(w)
 
 
@@ -224,7 +223,7 @@ def run(args: argparse.Namespace) -> int:
     spec = spec_from_args(args)
     omega, w_opt, w = _operating_point(args, spec)
     if args.profile_speed is not None:
-        check_option("--profile-speed", args.profile_speed, 0.0, OMEGA_MAX, lo_open=True, what="Omega_bar")
+        check_range("--profile-speed", args.profile_speed, limits.SPEED)
     out = output_dir(args)
     params = traced_params(spec)
 

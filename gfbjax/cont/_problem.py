@@ -87,15 +87,3 @@ def check_range(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = 
         rng = f"{'(' if lo_open else '['}{lo}, {hi}{')' if hi_open else ']'}"
         kind = "an int" if integer else "a number"
         raise ValueError(f"{name} must be {kind} in {rng}, got {value!r}")
-
-
-def check_step_settings(settings: Any) -> None:
-    """Checks shared by cycle and equilibrium continuation settings (step sizes, direction, point budget)."""
-    check_range("ds", settings.ds, 0.0, float("inf"), lo_open=True, hi_open=True)
-    if not (isinstance(settings.ds_min, (int, float)) and 0.0 < settings.ds_min <= settings.ds):
-        raise ValueError(f"ds_min must be in (0, ds={settings.ds}], got {settings.ds_min!r}")
-    if not (isinstance(settings.ds_max, (int, float)) and settings.ds <= settings.ds_max < float("inf")):
-        raise ValueError(f"ds_max must be in [ds={settings.ds}, inf), got {settings.ds_max!r}")
-    if settings.direction not in (1, -1):
-        raise ValueError(f"direction must be +1 or -1, got {settings.direction!r}")
-    check_range("max_points", settings.max_points, 1, 10**7, integer=True)

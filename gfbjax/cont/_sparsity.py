@@ -19,12 +19,13 @@ import jax.numpy as jnp
 import numpy as np
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Coloring:
     """Column colouring of a sparsity pattern.
 
     rows, cols: the structural entries (pattern plus diagonal), row-major; color: colour of each column;
-    dense_rows: rows taken by VJP.  ``gather_*`` map every entry to where its value is found.
+    dense_rows: rows taken by VJP.  Compared and hashed by identity, so that one colouring can be a static
+    argument of compiled code (make it once per pattern and keep it).
     """
 
     n: int
@@ -82,6 +83,12 @@ def color_pattern(pattern: np.ndarray, dense_threshold: int | None = None) -> Co
             used.append(col.copy())
     rows, cols = np.nonzero(pat)
     return Coloring(n=n, rows=rows, cols=cols, color=color, n_colors=len(used), dense_rows=dense_rows)
+
+
+def dense_jacobian(fn: Callable[[jax.Array], jax.Array], x: jax.Array, coloring: Coloring) -> jax.Array:
+    """The (n, n) Jacobian of ``fn`` at ``x`` from :func:`jacobian_values` (for dense factorisations)."""
+    c = coloring
+    return jnp.zeros((c.n, c.n), x.dtype).at[c.rows, c.cols].set(jacobian_values(fn, x, c))
 
 
 def jacobian_values(fn: Callable[[jax.Array], jax.Array], x: jax.Array, coloring: Coloring) -> jax.Array:

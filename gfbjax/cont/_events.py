@@ -21,19 +21,17 @@ removed first, see ``floquet.nontrivial``):
   defective pair it forms with the trivial one splits into a spurious complex
   pair of tiny argument (a 1:1 resonance, not a torus).
 
-Localisation: the secant/regula-falsi (Illinois) iteration on the arclength
-``s`` between two branch points, each evaluation being a full pseudo-arclength
-correction from the left point with step ``s``.
+Localisation is the driver's (:func:`._driver.locate`).
 """
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
 
-from . import collocation as col
-from .floquet import nontrivial
+from . import _collocation as col
+from ._floquet import nontrivial
 
 IMAG_TOL = 1e-7
 NS_MIN_ANGLE = 1e-2  # rad
@@ -75,48 +73,6 @@ def ns_angle(mu: np.ndarray, n_trivial: int) -> float:
         return float("nan")
     c = cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]
     return float(abs(np.angle(c)))
-
-
-def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_hi: float, *,
-           tol: float = 1e-9, s_tol: float = 1e-10, max_iter: int = 30) -> tuple[float, Any, float, bool]:
-    """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
-
-    ``g(s)`` returns (value, payload) and may return (nan, None) on failure.
-    Returns (s, payload, value, converged); not converged (and no evaluation) when
-    g_lo and g_hi do not bracket a zero.
-    """
-    a, b, ga, gb = 0.0, float(s_hi), float(g_lo), float(g_hi)
-    if not (np.sign(ga) * np.sign(gb) <= 0):
-        return b, None, gb, False
-    side = 0
-    best = (b, None, gb)
-    for _ in range(max_iter):
-        if ga == gb:
-            s = 0.5 * (a + b)
-        else:
-            s = b - gb * (b - a) / (gb - ga)
-            if not (min(a, b) < s < max(a, b)):
-                s = 0.5 * (a + b)
-        gs, payload = g(s)
-        if not np.isfinite(gs):
-            s = 0.5 * (a + b)
-            gs, payload = g(s)
-            if not np.isfinite(gs):
-                return best[0], best[1], best[2], False
-        best = (s, payload, gs)
-        if abs(gs) <= tol or abs(b - a) <= s_tol * max(1.0, abs(s_hi)):
-            return s, payload, gs, True
-        if np.sign(gs) == np.sign(gb):
-            b, gb = s, gs
-            if side == -1:
-                ga *= 0.5
-            side = -1
-        else:
-            a, ga = s, gs
-            if side == +1:
-                gb *= 0.5
-            side = +1
-    return best[0], best[1], best[2], False
 
 
 def double_orbit_pd(f: Any, args: Any, orbit: col.Orbit, scheme: col.Scheme,

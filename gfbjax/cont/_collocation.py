@@ -70,8 +70,6 @@ matrix (see ``floquet.py``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import partial
 from typing import Any, Callable, NamedTuple
 
 import equinox as eqx
@@ -289,7 +287,7 @@ def palc_constraint(base: Orbit, tangent: Orbit, ds: Any, ref: Orbit | None = No
     return Constraint(base if ref is None else ref, base, tangent, jnp.asarray(ds, dtype=base.xm.dtype))
 
 
-def _functional_coeffs(orbit: Orbit, con: Constraint, scheme: Scheme):
+def functional_coeffs(orbit: Orbit, con: Constraint, scheme: Scheme):
     """Node coefficients (2, N, m+1, n), parameter coefficients (2, 2) and values (2,)."""
     h = jnp.diff(orbit.mesh)
     Uref = con.ref.nodes()
@@ -325,7 +323,7 @@ def residual(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: S
     """All residuals: (collocation (N,m,n), periodicity (n,), scalar rows (2,))."""
     rc = collocation_residual(f, args, orbit, scheme)
     rper = orbit.xm[0] - orbit.xm[-1]
-    _, _, rs = _functional_coeffs(orbit, con, scheme)
+    _, _, rs = functional_coeffs(orbit, con, scheme)
     return rc, rper, rs
 
 
@@ -463,7 +461,7 @@ def linear_solve_multi(f: VectorField, args: Any, orbit: Orbit, con: Constraint,
     k = rc.shape[-1]
     blocks = collocation_blocks(f, args, orbit, scheme)
     cond = condense(blocks, rc.reshape(N, m * n, k))
-    coef, cp, _ = _functional_coeffs(orbit, con, scheme)  # (2, N, m+1, n)
+    coef, cp, _ = functional_coeffs(orbit, con, scheme)  # (2, N, m+1, n)
     aL = jnp.moveaxis(coef[:, :, 0], 0, 1)  # (N, 2, n)
     aI = jnp.moveaxis(coef[:, :, 1:m].reshape(2, N, (m - 1) * n), 0, 1)
     aR = jnp.moveaxis(coef[:, :, m], 0, 1)
@@ -530,12 +528,12 @@ def dense_newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, 
 
 
 # --------------------------------------------------------------------------
-# Newton corrector
+# One linearisation, two right-hand sides: the Newton step and the tangent
 # --------------------------------------------------------------------------
-@partial(jax.jit, static_argnums=(0, 4))
-def _step_and_tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
-    """Newton iterate, residual/step norms and the tangent at ``orbit``: one
-    linearisation, two right-hand sides (the only compiled kernel of Newton)."""
+def step_and_tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme):
+    """Newton iterate, residual/step max-norms and the normalised tangent at ``orbit`` (paper Eq. (34): the
+    augmented Jacobian times the tangent is the last unit vector, so the continuation row of ``con`` fixes its
+    orientation): one condensed linearisation for both.  Pure JAX; the dense corrector's ``linearise``."""
     N, m, n = orbit.N, scheme.m, orbit.n
     z = orbit.xm.dtype
     rc, rper, rs = residual(f, args, orbit, con, scheme)
@@ -549,70 +547,3 @@ def _step_and_tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, 
     t = t.scale(1.0 / jnp.sqrt(inner(t, t, scheme)))
     dnorm = jnp.max(jnp.abs(d.to_flat()))
     return orbit + d, rnorm, dnorm, t
-
-
-def newton_step(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
-    """One condensed Newton step delta (not applied)."""
-    new, _, _, _ = _step_and_tangent(f, args, orbit, con, scheme)
-    return Orbit(orbit.mesh, new.xm - orbit.xm, new.xi - orbit.xi, new.T - orbit.T, new.lam - orbit.lam)
-
-
-def tangent(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme) -> Orbit:
-    """Tangent of the solution curve (paper Eq. (34)): J_aug tau = e_cont, normalised.
-
-    The continuation row of ``con`` (previous tangent, or d/dlam for a fresh
-    start) fixes the orientation: <tau, con.v> > 0.
-    """
-    return _step_and_tangent(f, args, orbit, con, scheme)[3]
-
-
-STATUS_CONVERGED = 0
-STATUS_MAXITER = 1
-STATUS_NONFINITE = 2
-STATUS_DIVERGED = 3
-_REASONS = {STATUS_CONVERGED: "converged", STATUS_MAXITER: "maximum Newton iterations reached",
-            STATUS_NONFINITE: "non-finite residual or step", STATUS_DIVERGED: "Newton step grew (diverging)"}
-
-
-@dataclass(frozen=True)
-class NewtonResult:
-    """Outcome of a Newton correction.  ``orbit`` is the last finite iterate;
-    ``tangent`` the normalised tangent there (continuation row of the constraint)."""
-
-    orbit: Orbit
-    status: int
-    reason: str
-    iterations: int
-    residual_norm: float
-    step_norm: float
-    tangent: Orbit | None = None
-
-    @property
-    def converged(self) -> bool:
-        return self.status == STATUS_CONVERGED
-
-
-def newton(f: VectorField, args: Any, orbit: Orbit, con: Constraint, scheme: Scheme, *,
-           tol: float = 1e-10, rtol_step: float = 1e-10, max_iter: int = 12,
-           divergence_factor: float = 1e3) -> NewtonResult:
-    """Newton corrector.  Converged when the step is <= rtol_step * (1 + max|x|)
-    and the residual at the new iterate is <= tol (evaluated by one more
-    linearisation, which also yields the tangent).  Never returns a non-finite orbit."""
-    steps: list[float] = []
-    rn = dn = float("inf")
-    for it in range(1, max_iter + 1):
-        new, rn_j, dn_j, _ = _step_and_tangent(f, args, orbit, con, scheme)
-        rn, dn = float(rn_j), float(dn_j)
-        if not (np.isfinite(rn) and np.isfinite(dn)):
-            return NewtonResult(orbit, STATUS_NONFINITE, _REASONS[STATUS_NONFINITE], it, rn, dn)
-        steps.append(dn)
-        if len(steps) >= 3 and dn > divergence_factor * min(steps[:-1]):
-            return NewtonResult(orbit, STATUS_DIVERGED, _REASONS[STATUS_DIVERGED], it, rn, dn)
-        orbit = new
-        if dn <= rtol_step * (1.0 + float(jnp.max(jnp.abs(orbit.xm)))):
-            _, rfin, _, tan = _step_and_tangent(f, args, orbit, con, scheme)
-            rfin = float(rfin)
-            if np.isfinite(rfin) and (rfin <= tol or rfin <= 10 * rn):
-                return NewtonResult(orbit, STATUS_CONVERGED, _REASONS[STATUS_CONVERGED], it, rfin, dn, tan)
-            rn = rfin
-    return NewtonResult(orbit, STATUS_MAXITER, _REASONS[STATUS_MAXITER], max_iter, rn, dn)

@@ -1,0 +1,223 @@
+r"""Continuation of periodic orbits in lam: the cycle :class:`~._driver.Curve`, starts, and Floquet analysis.
+
+Points are :class:`~._collocation.Orbit` (collocation unknowns with T and lam); the inner product is that of the
+pseudo-arclength row (30).  Each correction is the one Newton corrector (:mod:`._newton`) on the linear solver of
+the settings (:mod:`._linear`); each converged point gets its Floquet multipliers (:mod:`._floquet`) from the
+corrector's own linearisation, its stability from the non-trivial ones, and the distance of the trivial
+multiplier from +1.  Test functions of LPC, PD and NS: :mod:`._events`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, Callable, Optional
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import _collocation as col
+from ._branch import Branch, PointRecord
+from ._driver import Curve, continue_curve
+from ._events import cycle_test_functions, detect, double_orbit_pd, ns_angle
+from ._floquet import FloquetMethod, nontrivial, trivial_error
+from ._linear import BoundSolver, Linearisation, choose_solver
+from ._problem import CycleProblem
+from ._settings import CycleSettings
+
+__all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "bind_solver", "start_from_samples", "start_from_function",
+           "start_from_hopf", "start_from_branch", "start_from_pd"]
+
+
+@dataclass(frozen=True)
+class CycleStart:
+    """Where a branch starts.  ``tangent=None``: ``orbit`` is a guess corrected at fixed lam, the first tangent
+    points to increasing lam * direction.  Otherwise ``orbit`` is a bifurcation point (Hopf / PD) and ``tangent``
+    the direction of the emanating branch (the start itself is not recorded)."""
+
+    orbit: col.Orbit
+    tangent: Optional[col.Orbit] = None
+    label: str = "start"
+
+
+# ---------------------------------------------------------------- starts
+def start_from_samples(t: np.ndarray, x: np.ndarray, T: float, lam: float,
+                       settings: CycleSettings, mesh: Any = None) -> CycleStart:
+    """From a time-integrated orbit: samples ``x[i] = x(t[i])`` over one period T."""
+    sch = col.Scheme(settings.m)
+    mesh = col.uniform_mesh(settings.N) if mesh is None else mesh
+    return CycleStart(col.orbit_from_samples(t, x, T, lam, sch, mesh), None, "samples")
+
+
+def start_from_function(x_of_t: Callable[[np.ndarray], np.ndarray], T: float, lam: float,
+                        settings: CycleSettings, mesh: Any = None) -> CycleStart:
+    """From a function of the scaled time t in [0,1] (vectorised, returns (len(t), n))."""
+    sch = col.Scheme(settings.m)
+    mesh = col.uniform_mesh(settings.N) if mesh is None else mesh
+    return CycleStart(col.orbit_from_function(x_of_t, T, lam, sch, mesh), None, "function")
+
+
+def start_from_hopf(hopf: Any, settings: CycleSettings) -> CycleStart:
+    """From a Hopf point (``lam, x, omega, v``): x(t) = x0 + a Re(v e^{2 pi i t}).
+
+    The start is the stationary orbit x0 with T = 2 pi / omega; the tangent is the normalised first harmonic
+    Re(v e^{2 pi i t}) (lam, T components 0, the Hopf bifurcation being a pitchfork in the amplitude a)."""
+    sch = col.Scheme(settings.m)
+    mesh = col.uniform_mesh(settings.N)
+    x0 = np.asarray(hopf.x, float)
+    v = np.asarray(hopf.v, complex)
+    T = 2 * np.pi / float(hopf.omega)
+    base = col.orbit_from_function(lambda t: np.tile(x0, (len(t), 1)), T, hopf.lam, sch, mesh)
+    phi = col.orbit_from_function(lambda t: np.real(v[None, :] * np.exp(2j * np.pi * t)[:, None]),
+                                  0.0, 0.0, sch, mesh)
+    phi = phi.scale(1.0 / float(jnp.sqrt(col.inner(phi, phi, sch))))
+    return CycleStart(base, phi, "hopf")
+
+
+def _orbit_of(st: dict[str, np.ndarray], index: int | None = None) -> col.Orbit:
+    pick = (lambda a: a[index]) if index is not None else (lambda a: a)
+    return col.Orbit(jnp.asarray(st["mesh"]), jnp.asarray(pick(st["xm"])), jnp.asarray(pick(st["xi"])),
+                     jnp.asarray(pick(st["T"])), jnp.asarray(pick(st["lam"])))
+
+
+def start_from_branch(branch: Branch, index: int) -> CycleStart:
+    """From a stored point of a branch computed with ``save_states=True``."""
+    if branch.states is None:
+        raise ValueError("branch has no stored states (use CycleSettings(save_states=True))")
+    return CycleStart(_orbit_of(branch.states, index), None, f"branch[{index}]")
+
+
+def start_from_pd(problem: CycleProblem, branch: Branch, special: Any,
+                  settings: CycleSettings | None = None) -> CycleStart:
+    """Switch onto the period-doubled branch at a located PD point of ``branch`` (``special``: index among the
+    branch's PD points, or the :class:`SpecialPoint`); transfer matrices from the linear solver of ``settings``."""
+    sp = branch.special_of("PD")[special] if isinstance(special, int) else special
+    o = _orbit_of(branch.special_states[sp.state])
+    sch = col.Scheme(int(branch.m))
+    G = bind_solver(problem, sch, settings).linearise(o).transfer_matrices()
+    doubled, direction = double_orbit_pd(problem.f, problem.args, o, sch, np.asarray(G))
+    return CycleStart(doubled, direction, "PD switch")
+
+
+# ---------------------------------------------------------------- analysis
+def bind_solver(problem: CycleProblem, scheme: col.Scheme, settings: CycleSettings | None = None) -> BoundSolver:
+    """The linear solver of ``settings`` (automatic choice when None) bound to ``problem`` and ``scheme``."""
+    s = settings or CycleSettings()
+    return choose_solver(s.linear_solver, problem).bind(problem, scheme)
+
+
+def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,
+                  settings: CycleSettings | None = None) -> tuple[Any, Linearisation | None]:
+    """Correct one orbit with the linear solver and Newton tolerances of ``settings`` (default
+    ``CycleSettings()``): at fixed lam = ``orbit.lam`` with phase reference ``orbit`` unless ``con`` is given.
+    Returns the :class:`NewtonSolution` (``x`` the orbit, ``aux`` the unit tangent) and the linearisation at
+    the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives."""
+    s = settings or CycleSettings()
+    scheme = col.Scheme(int(orbit.xi.shape[1]) + 1)
+    con = col.natural_constraint(orbit, orbit.lam) if con is None else con
+    return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
+
+
+def analyse(problem: CycleProblem, lin: Linearisation, floquet: FloquetMethod | None = None,
+            memo: dict | None = None) -> dict[str, Any]:
+    """Floquet multipliers (``spectrum``, decreasing modulus), stability (``stable``: the non-trivial multipliers
+    inside the unit circle) and ``trivial_error`` (distance of the multiplier closest to +1 from +1) of a converged
+    orbit, from its linearisation ``lin``.  ``floquet``: the method (default: the linearisation's own, all
+    multipliers when dense, the leading ones by Arnoldi when sparse); ``memo``: a dict kept along a branch (warm
+    starts)."""
+    floquet = floquet or lin.default_floquet()
+    mu = np.asarray(floquet.multipliers(lin, {} if memo is None else memo))
+    nt = nontrivial(mu, problem.n_trivial)
+    return {"spectrum": mu, "stable": bool(np.all(np.abs(nt) < 1.0)), "trivial_error": trivial_error(mu)}
+
+
+@partial(jax.jit, static_argnums=(1,))
+def _norm_and_extrema(orbit: col.Orbit, scheme: col.Scheme, comps: jax.Array):
+    U = orbit.nodes()[..., comps]
+    return col.l2_norm(orbit, scheme), jnp.max(U, axis=(0, 1)), jnp.min(U, axis=(0, 1))
+
+
+def _orbit_state(orbit: col.Orbit) -> dict[str, np.ndarray]:
+    return {"mesh": np.asarray(orbit.mesh), "xm": np.asarray(orbit.xm), "xi": np.asarray(orbit.xi),
+            "T": np.asarray(orbit.T), "lam": np.asarray(orbit.lam)}
+
+
+class CycleCurve(Curve):
+    """Periodic orbits of ``problem`` for the driver."""
+
+    kind = "cycles"
+
+    def __init__(self, problem: CycleProblem, settings: CycleSettings, scheme: col.Scheme, mesh: np.ndarray):
+        self.problem, self.settings, self.scheme, self._mesh = problem, settings, scheme, mesh
+        self.solver = bind_solver(problem, scheme, settings)  # a bad choice raises here, before any work
+        self.floquet = settings.floquet
+        self.memo: dict[str, Any] = {}
+        self.components = problem.components
+        self._comps = jnp.asarray(self.components)
+
+    def add(self, a, b):
+        return a + b
+
+    def scale(self, a, c):
+        return a.scale(c)
+
+    def inner(self, a, b):
+        return float(col.inner(a, b, self.scheme))
+
+    def lam(self, a):
+        return float(a.lam)
+
+    def palc_constraint(self, base, tangent, ds, ref):
+        return col.palc_constraint(base, tangent, ds, ref=ref)
+
+    def natural_constraint(self, ref, lam):
+        return col.natural_constraint(ref, lam)
+
+    def correct(self, pred, con):
+        return self.solver.correct(pred, con, self.settings.newton)
+
+    def analyse(self, X, lin):
+        return analyse(self.problem, lin, self.floquet, self.memo)
+
+    def tests(self, analysis, tangent_lam):
+        return cycle_test_functions(analysis["spectrum"], self.problem.n_trivial, tangent_lam)
+
+    def events(self, prev, cur, kinds):
+        return detect(prev, cur, kinds)
+
+    def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
+        l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
+        state = None
+        if self.settings.save_states:
+            state = {k: v for k, v in _orbit_state(X).items() if k != "mesh"}
+        return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
+                           an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state)
+
+    def state(self, X):
+        return _orbit_state(X)
+
+    def special(self, kind, X, an):
+        out: dict[str, Any] = {"period": float(X.T)}
+        if kind == "NS":
+            out["angle"] = ns_angle(an["spectrum"], self.problem.n_trivial)
+        return out
+
+    def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
+        shared = {"mesh": self._mesh} if settings.save_states else None
+        return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,
+                                  m=self.scheme.m, shared_state=shared)
+
+
+def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: CycleStart, *,
+                    callback: Optional[Callable[[int, PointRecord], Any]] = None,
+                    progress: bool = False) -> Branch:
+    """Continue a branch of periodic orbits of ``problem`` from ``start`` (see :mod:`._driver`).
+
+    Returns a :class:`Branch` (points so far and the :class:`Outcome`, whatever ended the continuation).
+    Raises ``ValueError`` before any work for a linear solver the problem cannot use."""
+    if not isinstance(start, CycleStart):
+        raise ValueError(f"start must be a CycleStart (see start_from_*), got {type(start).__name__}")
+    scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1)
+    curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
+    return continue_curve(curve, settings, start.orbit, start.tangent, callback=callback, progress=progress,
+                          desc="cycles")

@@ -1,0 +1,176 @@
+r"""Continuation of equilibria  f(x, lam) = 0  with Hopf and fold detection: the equilibrium
+:class:`~._driver.Curve`.
+
+Points are :math:`y = (x, \lambda)`.  The corrector is the one Newton corrector (:mod:`._newton`, compiled) on the
+bordered system :math:`f(x,\lambda) = 0,\ \langle y - y_k, v\rangle - \Delta s = 0` with the dense Jacobian
+:math:`[f_x\ f_\lambda;\ v^T]` (n is at most a few hundred); the same LU gives the unit tangent
+:math:`[f_x\ f_\lambda;\ v^T]\tau = e_{n+1}`, oriented by the continuation row.
+
+Eigenvalues of :math:`f_x` are computed at every point.  Test functions:
+
+* fold (limit point): the lam-component of the tangent changes sign;
+* Andronov-Hopf: :math:`\psi_H = \max \operatorname{Re}\mu` over the eigenvalues with non-zero imaginary part
+  changes sign (neutral saddles, real pairs :math:`\pm\kappa`, are thereby excluded).
+
+:func:`hopf_point` returns :math:`(\lambda, x, \omega, v)` with :math:`f_x v = i\omega v`, used by
+:func:`._cycles.start_from_hopf`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, Callable, NamedTuple, Optional
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._branch import Branch, PointRecord
+from ._driver import Curve, continue_curve
+from ._newton import NewtonSettings, solve as newton_solve
+from ._problem import EquilibriumProblem
+from ._settings import EquilibriumSettings
+
+__all__ = ["HopfPoint", "continue_equilibria", "hopf_point", "IMAG_TOL"]
+
+IMAG_TOL = 1e-8
+
+
+@dataclass(frozen=True)
+class HopfPoint:
+    """Hopf point: f_x(x, lam) v = i omega v, |v| = 1."""
+
+    lam: float
+    x: np.ndarray
+    omega: float
+    v: np.ndarray
+
+
+class _Row(NamedTuple):
+    """The continuation row <y - base, v> - ds = 0."""
+
+    base: jax.Array
+    v: jax.Array
+    ds: jax.Array
+
+
+def _linearise(f, args, con: _Row, y):
+    def F(y):
+        return jnp.concatenate([f(y[:-1], y[-1], args), jnp.atleast_1d(jnp.dot(y - con.base, con.v) - con.ds)])
+
+    r = F(y)
+    lu = jax.scipy.linalg.lu_factor(jax.jacfwd(F)(y))
+    e = jnp.zeros_like(y).at[-1].set(1.0)
+    t = jax.scipy.linalg.lu_solve(lu, e)
+    return jnp.max(jnp.abs(r)), jax.scipy.linalg.lu_solve(lu, -r), t / jnp.linalg.norm(t)
+
+
+@partial(jax.jit, static_argnums=(0, 4))
+def _correct(f, args, y0, con, newton: NewtonSettings):
+    return newton_solve(lambda y: _linearise(f, args, con, y), y0, newton)
+
+
+@partial(jax.jit, static_argnums=(0,))
+def _jacobian(f, args, y):
+    return jax.jacfwd(lambda x: f(x, y[-1], args))(y[:-1])
+
+
+def _eig(problem: EquilibriumProblem, y: np.ndarray):
+    ev, V = np.linalg.eig(np.asarray(_jacobian(problem.f, problem.args, jnp.asarray(y))))
+    o = np.argsort(-ev.real, kind="stable")
+    return ev[o], V[:, o]
+
+
+class EquilibriumCurve(Curve):
+    kind = "equilibria"
+
+    def __init__(self, problem: EquilibriumProblem, settings: EquilibriumSettings):
+        self.problem, self.settings = problem, settings
+        self.components = problem.components
+        self._e_lam = np.zeros(problem.n + 1)
+        self._e_lam[-1] = 1.0
+
+    def add(self, a, b):
+        return np.asarray(a) + np.asarray(b)
+
+    def scale(self, a, c):
+        return np.asarray(a) * c
+
+    def inner(self, a, b):
+        return float(np.dot(a, b))
+
+    def lam(self, a):
+        return float(a[-1])
+
+    def palc_constraint(self, base, tangent, ds, ref):
+        return _Row(jnp.asarray(base), jnp.asarray(tangent), jnp.asarray(float(ds)))
+
+    def natural_constraint(self, ref, lam):
+        base = np.array(ref, float)
+        base[-1] = lam
+        return _Row(jnp.asarray(base), jnp.asarray(self._e_lam), jnp.asarray(0.0))
+
+    def correct(self, pred, con):
+        sol = _correct(self.problem.f, self.problem.args, jnp.asarray(pred, float), con, self.settings.newton)
+        sol = type(sol)(np.asarray(sol.x), np.asarray(sol.aux), sol.code, sol.iterations, sol.residual, sol.step)
+        return sol, None
+
+    def analyse(self, y, lin):
+        ev, _ = _eig(self.problem, y)
+        return {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan")}
+
+    def tests(self, an, tangent_lam):
+        ev = an["spectrum"]
+        c = ev[np.abs(ev.imag) > IMAG_TOL * np.maximum(1, np.abs(ev))]
+        return {"FOLD": float(tangent_lam), "HOPF": float(np.max(c.real)) if len(c) else -np.inf}
+
+    def events(self, prev, cur, kinds):
+        return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
+                and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+
+    def record(self, y, an, iterations, ds, tangent_lam) -> PointRecord:
+        x = np.asarray(y[:-1])
+        c = self.components
+        return PointRecord(float(y[-1]), float("nan"), float(np.linalg.norm(x)), x[c].copy(), x[c].copy(),
+                           an["spectrum"], an["stable"], float("nan"), int(iterations), float(ds), float(tangent_lam),
+                           {"x": x.copy()})
+
+    def state(self, y):
+        return {"x": np.asarray(y[:-1]).copy(), "lam": np.asarray(y[-1])}
+
+    def special(self, kind, y, an):
+        if kind != "HOPF":
+            return {}
+        ev = an["spectrum"]
+        c = ev[np.abs(ev.imag) > IMAG_TOL]
+        omega = float(abs(c[np.argmin(np.abs(c.real))].imag))
+        return {"omega": omega, "period": 2 * np.pi / omega}
+
+
+def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettings, x0: Any, lam0: float,
+                        *, callback: Optional[Callable[[int, PointRecord], Any]] = None,
+                        progress: bool = False) -> Branch:
+    """Continue equilibria from the guess (x0, lam0), first corrected at fixed lam.  The returned ``Branch``
+    stores the eigenvalues of f_x in ``multipliers`` (decreasing real part) and every state in ``states['x']``."""
+    x0 = np.asarray(x0, float)
+    if x0.shape != (problem.n,):
+        raise ValueError(f"x0 must have shape (n,) = ({problem.n},), got {x0.shape}")
+    y0 = np.append(x0, float(lam0))
+    return continue_curve(EquilibriumCurve(problem, settings), settings, y0, callback=callback, progress=progress,
+                          desc="equilibria")
+
+
+def hopf_point(problem: EquilibriumProblem, branch: Branch, which: int = 0) -> HopfPoint:
+    """Data of the ``which``-th Hopf point of an equilibrium branch: (lam, x, omega, v) with f_x v = i omega v,
+    omega > 0, |v| = 1 and the phase of v chosen so that its largest component is real."""
+    hs = branch.special_of("HOPF")
+    if not hs:
+        raise ValueError("branch has no HOPF special point")
+    st = branch.special_states[hs[which].state]
+    y = np.append(st["x"], float(st["lam"]))
+    ev, V = _eig(problem, y)
+    cand = np.where(ev.imag > IMAG_TOL)[0]
+    k = cand[np.argmin(np.abs(ev[cand].real))]
+    v = V[:, k]
+    v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))
+    return HopfPoint(float(y[-1]), y[:-1].copy(), float(ev[k].imag), v / np.linalg.norm(v))

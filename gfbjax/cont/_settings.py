@@ -1,0 +1,187 @@
+"""Settings of a continuation run: step control and bounds (shared), the algorithm, and what is computed at each
+point.  Every field is checked when the settings are built; a bad value raises ``ValueError`` naming the field and
+its allowed range.
+
+Algorithms are small objects, not strings: :class:`PseudoArclength` (the default; passes folds) and
+:class:`Natural` (steps in the parameter itself; fails at folds).  The linear solver of cycles
+(:class:`~._linear.DenseCondensation`, :class:`~._linear.SparseSweep`) and the Floquet method
+(:class:`~._floquet.PeriodicQR`, :class:`~._floquet.TransferProduct`, :class:`~._floquet.Arnoldi`) are chosen the
+same way; ``None`` means the automatic choice.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ._floquet import FloquetMethod
+from ._linear import LinearSolver
+from ._newton import NewtonSettings
+from ._problem import check_range
+
+__all__ = ["PseudoArclength", "Natural", "CycleSettings", "EquilibriumSettings"]
+
+
+@dataclass(frozen=True)
+class PseudoArclength:
+    """Pseudo-arclength continuation (paper Eq. (30)): predictor along the unit tangent (or, with
+    ``secant=True``, along the secant through the last two points), corrector on the hyperplane orthogonal to it
+    at distance ds.  Passes folds."""
+
+    secant: bool = False
+
+    def predict(self, space: Any, X: Any, X_prev: Any, tau: Any, ds: float, direction: int, dlam_max: float):
+        """(prediction, constraint, ds) of the next step; ds is capped so that lam moves at most dlam_max."""
+        d = tau
+        if self.secant and X_prev is not None:
+            sec = space.add(X, space.scale(X_prev, -1.0))
+            d = space.scale(sec, 1.0 / float(np.sqrt(space.inner(sec, sec))))
+        # cap the parameter change per step: the arclength metric can be dominated by T or by many states
+        ds = min(ds, dlam_max / max(abs(float(space.lam(d))), 1e-300))
+        pred = space.add(X, space.scale(d, ds))
+        return pred, space.palc_constraint(X, d, ds, pred), ds, d
+
+
+@dataclass(frozen=True)
+class Natural:
+    """Natural-parameter continuation: lam = lam_k + ds * direction, predictor by secant extrapolation of the last
+    two points (the last point for the first step).  Fails at folds; the tangent is not used."""
+
+    def predict(self, space: Any, X: Any, X_prev: Any, tau: Any, ds: float, direction: int, dlam_max: float):
+        ds = min(ds, dlam_max)
+        step = ds * float(direction)
+        pred = X
+        if X_prev is not None:
+            sec = space.add(X, space.scale(X_prev, -1.0))
+            pred = space.add(X, space.scale(sec, step / float(space.lam(X) - space.lam(X_prev))))
+        return pred, space.natural_constraint(pred, float(space.lam(X)) + step), ds, None
+
+
+ALGORITHMS = (PseudoArclength, Natural)
+
+
+@dataclass(frozen=True)
+class _StepSettings:
+    """Fields shared by every continuation, with their common defaults (documented in the subclasses)."""
+
+    ds: float = 0.05
+    ds_max: float = 0.5
+    direction: int = 1
+    lam_min: float = -np.inf
+    lam_max: float = np.inf
+    dlam_max: float = np.inf
+    fast_iter: int = 3
+    grow: float = 1.5
+    algorithm: Any = PseudoArclength()
+    locate: bool = True
+
+    def _check_steps(self) -> None:
+        check_range("ds", self.ds, 0.0, float("inf"), lo_open=True, hi_open=True)
+        if not (isinstance(self.ds_min, (int, float)) and 0.0 < self.ds_min <= self.ds):
+            raise ValueError(f"ds_min must be in (0, ds={self.ds}], got {self.ds_min!r}")
+        if not (isinstance(self.ds_max, (int, float)) and self.ds <= self.ds_max < float("inf")):
+            raise ValueError(f"ds_max must be in [ds={self.ds}, inf), got {self.ds_max!r}")
+        if self.direction not in (1, -1):
+            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+        check_range("max_points", self.max_points, 1, 10**7, integer=True)
+        if not (isinstance(self.lam_min, (int, float)) and isinstance(self.lam_max, (int, float))
+                and self.lam_min < self.lam_max):
+            raise ValueError(f"lam_min must be < lam_max, got lam_min={self.lam_min!r}, lam_max={self.lam_max!r}")
+        if not (isinstance(self.dlam_max, (int, float)) and self.dlam_max > 0.0):
+            raise ValueError(f"dlam_max must be in (0, inf], got {self.dlam_max!r}")
+        check_range("newton_tol", self.newton_tol, 0.0, 1.0, lo_open=True)
+        check_range("newton_max_iter", self.newton_max_iter, 1, 1000, integer=True)
+        check_range("fast_iter", self.fast_iter, 1, self.newton_max_iter, integer=True)
+        check_range("grow", self.grow, 1.0, 10.0)
+        if not isinstance(self.algorithm, ALGORITHMS):
+            raise ValueError(f"algorithm must be PseudoArclength(...) or Natural(), got {self.algorithm!r}")
+        if not isinstance(self.locate, bool):
+            raise ValueError(f"locate must be True or False, got {self.locate!r}")
+        check_range("locate_tol", self.locate_tol, 0.0, 1.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class CycleSettings(_StepSettings):
+    """Settings of the continuation of periodic orbits.
+
+    Discretisation (for starts built from samples, functions or Hopf points; a given start orbit keeps its own
+    mesh): ``m`` collocation points per interval in [2, 7]; ``N`` mesh intervals >= 2.
+    Steps: ``ds`` first arclength step (> 0), ``ds_min`` <= ds (the branch ends with ``STEP_TOO_SMALL`` when a
+    failed correction halves the step below it), ``ds_max`` >= ds; after a correction in at most ``fast_iter``
+    Newton iterations the step grows by ``grow`` in [1, 10]; ``dlam_max`` caps the predicted change of lam per
+    step (the arclength metric can be dominated by T or by many states; inf = no cap).
+    ``direction``: +1/-1, the initial orientation in lam.  Bounds: ``max_points`` recorded points; the branch ends
+    (``REACHED_END``) when lam leaves [``lam_min``, ``lam_max``].
+    Corrector: ``newton_tol`` (residual max-norm accepted after a small step), ``newton_step_tol`` (a step is small
+    when |dx| <= tol (1 + max|x|)), ``newton_max_iter``.
+    ``algorithm``: :class:`PseudoArclength` (default) or :class:`Natural`.
+    Events: ``detect`` any of ("LPC", "PD", "NS"); ``locate`` drives each test function to zero (tolerance
+    ``locate_tol``) and inserts the located point in the branch.
+    ``floquet``: a Floquet method (None: PeriodicQR with the dense solver, Arnoldi(k=12) with the sparse one).
+    ``linear_solver``: DenseCondensation(), SparseSweep(...) or None (sparse when the problem has a Jacobian
+    pattern and n >= 80).  ``save_states``: keep every point's full orbit in the branch (restarts, energies).
+    """
+
+    m: int = 4
+    N: int = 20
+    ds_min: float = 1e-6
+    max_points: int = 100
+    newton_tol: float = 1e-9
+    newton_step_tol: float = 1e-9
+    newton_max_iter: int = 8
+    detect: tuple[str, ...] = ("LPC", "PD", "NS")
+    locate_tol: float = 1e-8
+    floquet: FloquetMethod | None = None
+    linear_solver: LinearSolver | None = None
+    save_states: bool = False
+
+    def __post_init__(self) -> None:
+        check_range("m", self.m, 2, 7, integer=True)
+        check_range("N", self.N, 2, 10**6, integer=True)
+        self._check_steps()
+        check_range("newton_step_tol", self.newton_step_tol, 0.0, 1.0, lo_open=True)
+        bad = [d for d in self.detect if d not in ("LPC", "PD", "NS")]
+        if bad or isinstance(self.detect, str):
+            raise ValueError(f"detect entries must be in ('LPC', 'PD', 'NS'), got {self.detect!r}")
+        if self.floquet is not None and not isinstance(self.floquet, FloquetMethod):
+            raise ValueError(f"floquet must be PeriodicQR(), TransferProduct(), Arnoldi(k) or None, "
+                             f"got {self.floquet!r}")
+        if self.linear_solver is not None and not isinstance(self.linear_solver, LinearSolver):
+            raise ValueError(f"linear_solver must be DenseCondensation(), SparseSweep(...) or None (automatic), "
+                             f"got {self.linear_solver!r}")
+
+    @property
+    def newton(self) -> NewtonSettings:
+        return NewtonSettings(tol=self.newton_tol, atol_step=self.newton_step_tol, rtol_step=self.newton_step_tol,
+                              max_iter=self.newton_max_iter)
+
+
+@dataclass(frozen=True)
+class EquilibriumSettings(_StepSettings):
+    """Settings of the continuation of equilibria.
+
+    Steps and bounds as in :class:`CycleSettings` (``ds``, ``ds_min``, ``ds_max``, ``direction``, ``max_points``,
+    ``lam_min``, ``lam_max``, ``dlam_max``, ``fast_iter``, ``grow``, ``algorithm``).
+    Corrector: ``newton_tol`` (a step is small when |dy| <= tol (1 + max|y|); the residual is then accepted below
+    max(1e3 tol, 1e-9)), ``newton_max_iter``.
+    Events: ``detect`` any of ("FOLD", "HOPF"); ``locate``, ``locate_tol`` as for cycles.
+    """
+
+    ds_min: float = 1e-8
+    max_points: int = 200
+    newton_tol: float = 1e-11
+    newton_max_iter: int = 10
+    detect: tuple[str, ...] = ("FOLD", "HOPF")
+    locate_tol: float = 1e-10
+
+    def __post_init__(self) -> None:
+        self._check_steps()
+        bad = [d for d in self.detect if d not in ("FOLD", "HOPF")]
+        if bad or isinstance(self.detect, str):
+            raise ValueError(f"detect entries must be in ('FOLD', 'HOPF'), got {self.detect!r}")
+
+    @property
+    def newton(self) -> NewtonSettings:
+        return NewtonSettings(tol=max(1e3 * self.newton_tol, 1e-9), atol_step=self.newton_tol,
+                              rtol_step=self.newton_tol, max_iter=self.newton_max_iter)

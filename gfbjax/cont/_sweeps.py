@@ -1,0 +1,178 @@
+r"""The collocation Jacobian as interval sweeps: one linearisation class for factorised interval blocks.
+
+On interval j, with the left mesh value :math:`x_j` given, the m collocation equations determine the m node blocks
+:math:`z_j = (w_j, x_{j+1})`:
+
+.. math:: K_j z_j = c_j - A_{L,j} x_j - B_{p,j}\,\delta p,\qquad K_j = [A_I\ A_R].
+
+A *sweep* over j = 0..N-1 maps :math:`(x_0, \delta p)` to the whole linearised orbit (multiple shooting with
+implicit collocation steps); the *adjoint sweep* runs the transposed blocks from the last interval back.  On top
+of the two:
+
+* :meth:`IntervalSweeps.solve`: the bordered Newton system, reduced to the n + 2 unknowns :math:`(x_0, \delta p)`
+  (periodicity, phase and continuation rows) and solved by GMRES whose product is one sweep;
+* :meth:`IntervalSweeps.solve_transpose`: :math:`J^T\lambda = g` the same way with adjoint sweeps;
+* the monodromy operator :math:`M = \Gamma_{N-1}\cdots\Gamma_0` and its transpose, and the transfer matrices.
+
+The factorisations may be SuperLU objects (sparse blocks, :mod:`._sparse`) or dense LU (:class:`DenseLU`, for
+the derivative computations of the dense solver): anything with ``solve(b, trans="N"|"T")``.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import jax.numpy as jnp
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from . import _collocation as col
+from ._linear import Linearisation
+from ._newton import LinearSolveError
+
+__all__ = ["IntervalSweeps", "DenseLU"]
+
+
+class DenseLU:
+    """A dense LU with the ``solve(b, trans)`` interface of SuperLU."""
+
+    def __init__(self, K: np.ndarray):
+        self._lu = sla.lu_factor(K, check_finite=False)
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        return sla.lu_solve(self._lu, b, trans=1 if trans == "T" else 0, check_finite=False)
+
+
+class IntervalSweeps(Linearisation):
+    """Factorised interval blocks at one orbit, with the phase/continuation rows of one constraint.
+
+    orbit: the linearisation point; m: collocation degree; lus: N factorisations of K_j (mn x mn); AL: N blocks
+    A_{L,j} (mn x n, anything with ``@`` and ``.T``); Bp: (N, mn, 2) columns d/dT, d/dlam; coef (2, N, m+1, n) and
+    cp (2, 2): the two scalar rows on the nodes and on (T, lam); gmres: settings with ``gmres_rtol``,
+    ``gmres_restart``, ``gmres_maxiter``.
+    """
+
+    def __init__(self, orbit: col.Orbit, m: int, lus: Sequence[Any], AL: Sequence[Any], Bp: np.ndarray,
+                 coef: np.ndarray, cp: np.ndarray, gmres: Any):
+        self.orbit, self.m, self.n = orbit, m, orbit.n
+        self.lus, self.AL, self.Bp, self.coef, self.cp, self.gmres = list(lus), list(AL), Bp, coef, cp, gmres
+
+    # ---- sweeps
+    def sweep(self, dx0: np.ndarray, dp: np.ndarray, c: np.ndarray | None = None):
+        """Mesh values (N+1, n) and interior values (N, m-1, n) of the linearised orbit from (dx0, dp), with
+        collocation right-hand sides ``c`` (N, mn) (default 0)."""
+        k = (self.m - 1) * self.n
+        xs, ws = [dx0], []
+        x = dx0
+        for j, lu in enumerate(self.lus):
+            rhs = -(self.AL[j] @ x) - self.Bp[j] @ dp
+            if c is not None:
+                rhs = rhs + c[j]
+            z = lu.solve(rhs)
+            ws.append(z[:k])
+            x = z[k:]
+            xs.append(x)
+        return np.array(xs), np.array(ws).reshape(len(self.lus), self.m - 1, self.n)
+
+    def adjoint_sweep(self, w: np.ndarray) -> np.ndarray:
+        """psi (N, mn) with sum_j psi_j . c_j = w . x_N for the sweep from x_0 = 0, dp = 0 with right-hand sides c:
+        the transposed blocks from the last interval back (M^T w is then -A_{L,0}^T psi_0)."""
+        k = (self.m - 1) * self.n
+        psis = [None] * len(self.lus)
+        y = np.asarray(w)
+        for j in range(len(self.lus) - 1, -1, -1):
+            psis[j] = self.lus[j].solve(np.concatenate([np.zeros(k, dtype=y.dtype), y]), trans="T")
+            y = -(self.AL[j].T @ psis[j])
+        return np.array(psis)
+
+    def sweep_transpose(self, lam_per: np.ndarray, lam_s: np.ndarray, gxm=None, gxi=None, gp=None):
+        """Multipliers of the collocation rows (N, mn) from those of the periodicity (lam_per) and scalar rows
+        (lam_s), and the residual (n + 2,) of the remaining transposed equations (columns of x_0 and (T, lam)),
+        for the right-hand side g = (gxm, gxi, gp) (default 0).  See :meth:`solve_transpose`."""
+        N, m, n = len(self.lus), self.m, self.n
+        C = np.einsum("a,ajin->jin", lam_s, self.coef)  # the scalar rows' weight on every node, (N, m+1, n)
+        bx = np.zeros((N + 1, n))
+        bx[:-1] += C[:, 0]
+        bx[1:] += C[:, m]
+        bw = C[:, 1:m]
+        gxm = np.zeros((N + 1, n)) if gxm is None else gxm
+        gxi = np.zeros((N, m - 1, n)) if gxi is None else gxi
+        gp = np.zeros(2) if gp is None else gp
+        lams = [None] * N
+        nxt = lam_per  # weight on x_{j+1} from the right: +lam_per for x_N (row x_0 - x_N), then -A_L^T lam_{j+1}
+        for j in range(N - 1, -1, -1):
+            rhs = np.concatenate([(gxi[j] - bw[j]).ravel(), gxm[j + 1] - bx[j + 1] + nxt])
+            lams[j] = self.lus[j].solve(rhs, trans="T")
+            nxt = -(self.AL[j].T @ lams[j])
+        r_x0 = -nxt + lam_per + bx[0] - gxm[0]  # A_L0^T lam_0 + lam_per + B_x0^T lam_s - g_x0
+        r_p = sum(self.Bp[j].T @ lams[j] for j in range(N)) + self.cp.T @ lam_s - gp
+        return np.array(lams), np.concatenate([r_x0, r_p])
+
+    def _border(self, xm: np.ndarray, w: np.ndarray, dp: np.ndarray) -> np.ndarray:
+        U = np.concatenate([xm[:-1, None], w, xm[1:, None]], axis=1)
+        return np.einsum("ajin,jin->a", self.coef, U) + self.cp @ dp
+
+    def _gmres(self, matvec, b: np.ndarray) -> np.ndarray:
+        s = self.gmres
+        n2 = len(b)
+        if float(np.linalg.norm(b)) == 0.0:
+            return np.zeros(n2)
+        A = spla.LinearOperator((n2, n2), matvec=matvec, dtype=float)
+        v, info = spla.gmres(A, b, rtol=s.gmres_rtol, atol=0.0, restart=min(n2, s.gmres_restart),
+                             maxiter=s.gmres_maxiter)
+        if info != 0 or not np.all(np.isfinite(v)):
+            raise LinearSolveError(f"GMRES did not converge (info={info})")
+        return v
+
+    # ---- the Linearisation protocol
+    def solve(self, rc, rper, rs) -> col.Orbit:
+        n = self.n
+        c = np.asarray(rc).reshape(len(self.lus), -1)
+        xp, wp = self.sweep(np.zeros(n), np.zeros(2), c)
+        b = np.concatenate([np.asarray(rper) + xp[-1], np.asarray(rs) - self._border(xp, wp, np.zeros(2))])
+
+        def matvec(v):
+            xm, w = self.sweep(v[:n], v[n:])
+            return np.concatenate([v[:n] - xm[-1], self._border(xm, w, v[n:])])
+
+        v = self._gmres(matvec, b)
+        xm, w = self.sweep(v[:n], v[n:], c)
+        return col.Orbit(self.orbit.mesh, jnp.asarray(xm), jnp.asarray(w), jnp.asarray(v[n]), jnp.asarray(v[n + 1]))
+
+    def solve_many(self, rc: Any) -> list[col.Orbit]:
+        """J^{-1} (rc[i], 0, 0) for a stack of collocation right-hand sides rc (k, N, m, n)."""
+        n = self.n
+        return [self.solve(r, np.zeros(n), np.zeros(2)) for r in np.asarray(rc)]
+
+    def solve_transpose(self, g: col.Orbit):
+        """J^T lam = g by adjoint sweeps: for given multipliers (lam_per, lam_s) of the periodicity and scalar
+        rows, the columns of (w_j, x_{j+1}) give the collocation multipliers by transposed solves from the last
+        interval back; the columns of x_0 and (T, lam) are n + 2 equations for (lam_per, lam_s), solved by GMRES
+        (the transpose of the forward reduced system)."""
+        n = self.n
+        gxm, gxi, gp = np.asarray(g.xm), np.asarray(g.xi), np.array([float(g.T), float(g.lam)])
+        _, r0 = self.sweep_transpose(np.zeros(n), np.zeros(2), gxm, gxi, gp)
+        v = self._gmres(lambda v: self.sweep_transpose(v[:n], v[n:])[1], -r0)
+        lams, _ = self.sweep_transpose(v[:n], v[n:], gxm, gxi, gp)
+        return lams.reshape(len(self.lus), self.m, n), v[:n], v[n:]
+
+    def monodromy_matvec(self, v: np.ndarray) -> np.ndarray:
+        return self.sweep(np.asarray(v, float), np.zeros(2))[0][-1]
+
+    def monodromy_rmatvec(self, y: np.ndarray) -> np.ndarray:
+        """M^T y (M = Gamma_{N-1}...Gamma_0, Gamma_j = -E K_j^{-1} A_{L,j} with E the last n rows)."""
+        return -(self.AL[0].T @ self.adjoint_sweep(np.asarray(y, float))[0])
+
+    def default_floquet(self):
+        from ._floquet import Arnoldi
+        return Arnoldi()
+
+    def transfer_matrices(self) -> np.ndarray:
+        """Gamma_j (N, n, n) (n right-hand sides per interval: for branch switching, not per point)."""
+        k = (self.m - 1) * self.n
+        return np.array([-lu.solve(_dense(AL))[k:] for lu, AL in zip(self.lus, self.AL)])
+
+
+def _dense(A: Any) -> np.ndarray:
+    return A.toarray() if sps.issparse(A) else np.asarray(A)
