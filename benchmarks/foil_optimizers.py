@@ -4,7 +4,8 @@ limit-cycle solves and wall time to the optimum, both objectives, at Omega_bar =
 Both methods start from the reference foil (alpha_f 0.1, eta 0.05) inside the bounds of Appendix A2, warm-start
 every cycle from the previous one and stop on their own criteria (pattern search: mesh < 1e-6 or 300 iterations;
 gradient: first-order optimality on the box, :func:`gfbjax.design.optimizers.minimize_log_box`).  A gradient evaluation is
-one cycle solve plus the implicit derivatives of W_cb and max|mu|; it counts as one solve and one gradient.  The
+one cycle solve plus the implicit derivatives of W_cb and max|mu| (``FoilDesign``'s default gradient mode, the
+adjoint one, on either linear solver); it counts as one solve and one gradient.  The
 gradient optimum "matches" when its objective is within 0.5% of the pattern search's.  Two counts are reported:
 to each method's own stopping rule, and to the first evaluation within 0.5% of the better of the two optima
 (the issue's "to reach the same optimum").  Figures: the traces of paper Fig. 15, one per objective.
@@ -107,6 +108,7 @@ def main() -> None:
                              "value": r.value, "W_cb": r.evaluation.W_cb, "max_mu": r.evaluation.max_mu,
                              "stable": r.evaluation.stable, "solves": r.n_solves, "gradients": r.n_gradients,
                              "seconds": round(r.seconds, 2), "reason": r.reason, "compile_s": round(t_compile, 1),
+                             "gradient_mode": design.gradient_mode,
                              "history": r.history.tolist()})
                 print(f"Omega {w} {obj:>6} {method:>8}: alpha_f {r.alpha_f:.5g} eta {r.eta:.5g} value {r.value:.8g} "
                       f"solves {r.n_solves} gradients {r.n_gradients} {r.seconds:.1f} s ({r.reason})", flush=True)

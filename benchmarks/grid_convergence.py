@@ -25,9 +25,13 @@ How the solves are done (all from the project's vector field ``gfbjax.model.bala
 * every other grid is started at each speed from the solution of the nearest already solved grid at the same
   speed, interpolated (pressure field and foil strips, rotor copied); should that Newton fail, the grid falls back
   to a speed sweep from a solved speed, and finally to ``solve_equilibrium``;
-* Newton: one jit-compiled function per grid returns ``(J, f)`` (``jax.jacfwd``); steps are solved with a sparse
-  LU (scipy ``splu``) and damped by backtracking that keeps the film open and decreases ``|f|``; converged when a
-  full step has ``|ds|_inf < 1e-10`` (the tolerance of ``solve_equilibrium``);
+* Newton: the one Newton corrector of ``gfbjax.cont``, stepped from the host (:func:`gfbjax.cont.newton_solve_host`,
+  so that the steps can use scipy's sparse LU).  This script supplies its linearisation and its damping: one
+  jit-compiled function per grid returns ``(J, f)`` (``jax.jacfwd``); steps are solved with a dense LU up to 400
+  states and a sparse LU (scipy ``splu``) above; the damping backtracks over the step fractions
+  {1, 1/2, ..., 1/64} to the first that keeps the film open and decreases ``|f|_2`` (a full step below the
+  tolerance is always taken); converged when a full step has ``|ds|_inf <= 1e-10`` (the tolerance of
+  ``solve_equilibrium``).  The recorded ``residual`` of a solve is ``|f|_2`` at the returned state;
 * eigenvalues: dense LAPACK for ``n <= 1000``; above that (the reference grids) shift-invert ARPACK
   (``scipy.sparse.linalg.eigs``, ``sigma`` at each of the rightmost eigenvalues of the next coarser solved grid),
   keeping the rightmost of the eigenvalues found.
@@ -64,6 +68,7 @@ import scipy.sparse.linalg as spla  # noqa: E402
 from scipy.interpolate import RegularGridInterpolator  # noqa: E402
 
 import gfbjax  # noqa: E402  (turns on x64)
+from gfbjax import cont  # noqa: E402
 from gfbjax.model import balanced_vector_field, layout  # noqa: E402
 from gfbjax.analyses.static import solve_equilibrium  # noqa: E402
 
@@ -106,6 +111,13 @@ def _jf(s, omega, params):
     return jax.jacfwd(lambda x: (f(x), f(x)), has_aux=True)(s)
 
 
+def newton_settings(max_iter: int) -> cont.NewtonSettings:
+    """Converged at a full step with |ds|_inf <= XTOL, without a further evaluation (the damping keeps |f|
+    decreasing, so the residual cannot stall); no divergence test (the damping keeps the iteration monotone)."""
+    return cont.NewtonSettings(tol=math.inf, atol_step=XTOL, rtol_step=0.0, max_iter=max_iter,
+                               divergence=math.inf, verify_residual=False)
+
+
 class GridSolver:
     """Equilibria and Jacobian spectra on one grid."""
 
@@ -121,6 +133,7 @@ class GridSolver:
         th = np.asarray(self.grid.theta_nodes(float(self.params.theta0)))
         self.cos, self.sin = np.cos(th), np.sin(th)
         self._jf = jax.jit(_jf)
+        self._f = jax.jit(balanced_vector_field)
         self.states: dict[float, np.ndarray] = {}
         self.jac: dict[float, np.ndarray] = {}
         self.info: dict[float, dict] = {}
@@ -136,41 +149,48 @@ class GridSolver:
         xj, yj = s[self.sl["rotor"]][:2]
         return float(np.min(1.0 - xj * self.cos - yj * self.sin + q))
 
+    def f_norm(self, s: np.ndarray, omega: float) -> float:
+        return float(np.linalg.norm(np.asarray(self._f(jnp.asarray(s), jnp.asarray(omega), self.params))))
+
     def _lin_solve(self, J: np.ndarray, r: np.ndarray) -> np.ndarray:
-        if self.n <= 400:
-            return np.linalg.solve(J, r)
-        return spla.splu(sps.csc_matrix(J)).solve(r)
+        try:
+            if self.n <= 400:
+                return np.linalg.solve(J, r)
+            return spla.splu(sps.csc_matrix(J)).solve(r)
+        except (RuntimeError, np.linalg.LinAlgError) as e:  # a singular Jacobian ends the solve
+            raise cont.LinearSolveError(str(e)) from e
 
     def newton(self, s0: np.ndarray, omega: float, max_iter: int = 25):
-        """Damped Newton from s0; returns (state, J at the state, iterations, |f|) or None on failure."""
-        s = np.array(s0, dtype=float)
-        if self.h_min(s) <= 0.0:
+        """Damped Newton from s0 (the corrector of ``gfbjax.cont`` with this grid's linearisation and damping, see
+        the module docstring); returns (state, J at the state, iterations, |f|_2 at the state) or None on failure."""
+        s0 = np.asarray(s0, dtype=float)
+        if self.h_min(s0) <= 0.0:  # a closed film: no finite residual to start from
             return None
-        J, r = self.jf(s, omega)
-        nr = float(np.linalg.norm(r))
-        if not math.isfinite(nr):
-            return None
-        for k in range(1, max_iter + 1):
-            try:
-                ds = -self._lin_solve(J, r)
-            except (RuntimeError, np.linalg.LinAlgError):
-                return None
-            if not np.all(np.isfinite(ds)):
-                return None
+
+        def linearise(s):
+            J, r = self.jf(np.asarray(s), omega)
+            return float(np.max(np.abs(r))), -self._lin_solve(J, r), float(np.linalg.norm(r))
+
+        def damping(s, ds, nr):
+            """The first step fraction that keeps the film open and decreases |f|_2 (0: none does).  Returned as
+            a NumPy scalar: the corrector negates the comparison ``t > 0`` (``~`` on a Python bool is -2)."""
+            s, ds = np.asarray(s), np.asarray(ds)
+            small = float(np.max(np.abs(ds))) <= XTOL
             for t in STEP_FRACTIONS:
                 s1 = s + t * ds
                 if self.h_min(s1) <= 0.0:
                     continue
-                J1, r1 = self.jf(s1, omega)
-                n1 = float(np.linalg.norm(r1))
-                if math.isfinite(n1) and (n1 < nr * (1.0 - 1e-4 * t) or (t == 1.0 and np.max(np.abs(ds)) < XTOL)):
-                    break
-            else:
-                return None
-            s, J, r, nr = s1, J1, r1, n1
-            if t == 1.0 and np.max(np.abs(ds)) < XTOL:
-                return s, J, k, nr
-        return None
+                n1 = self.f_norm(s1, omega)
+                if math.isfinite(n1) and (n1 < nr * (1.0 - 1e-4 * t) or (t == 1.0 and small)):
+                    return np.float64(t)
+            return np.float64(0.0)
+
+        sol = cont.newton_solve_host(linearise, s0, newton_settings(max_iter), damping=damping)
+        if not bool(sol.converged):
+            return None
+        s = np.asarray(sol.x)
+        J, r = self.jf(s, omega)
+        return s, J, int(sol.iterations), float(np.linalg.norm(r))
 
     def accept(self, omega: float, sol, how: str) -> None:
         s, J, it, res = sol

@@ -32,7 +32,7 @@ The synchronous (1X) unbalance response of the reference system at Omega_bar = 0
 Accuracy metric (every method): max over 32 equally spaced unbalance phases phi_k = 2 pi k / 32 of
 ``max(|x_j - x_j,ref|, |y_j - y_j,ref|)`` (journal displacement, units of the clearance).  For the autonomous
 collocation orbits the time of phase phi_k is found from the oscillator states (cos phi, sin phi).  Reference:
-collocation m = 5, N = 128 (sparse backend, Newton to 1e-12); its own error is estimated by the change from
+collocation m = 5, N = 128 (sparse linear solver, Newton to 1e-12); its own error is estimated by the change from
 m = 5, N = 64 and checked against tight diffrax (rtol 1e-9, started on the reference cycle).
 *Matched accuracy*: the target is the collocation's error; the other methods must get to it or below.
 The model's film force uses the exact Gumbel condition max(p - 1, 0), so the vector field is only Lipschitz

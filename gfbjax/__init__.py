@@ -21,6 +21,7 @@ import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
+from . import limits  # noqa: E402
 from .params import (  # noqa: E402
     VARIATIONS,
     ParameterError,
@@ -36,6 +37,7 @@ from .params import (  # noqa: E402
 )
 
 __all__ = [
+    "limits",
     "VARIATIONS",
     "ParameterError",
     "Params",

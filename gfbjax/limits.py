@@ -27,7 +27,7 @@ __all__ = [
     "is_traced",
     "check_real",
     # speeds and runs
-    "SPEED", "SPEED_STEP", "RPM", "LOAD_W", "REVOLUTIONS", "SETTLE_REVOLUTIONS", "ACCEL", "MAX_HISTORY_BYTES",
+    "SPEED", "SPEED_STEP", "LOAD_W", "REVOLUTIONS", "SETTLE_REVOLUTIONS", "ACCEL", "MAX_HISTORY_BYTES",
     "check_history",
     # grids
     "NX", "NZ", "MAX_DENSE_UNKNOWNS", "STATES", "n_states", "check_grid", "PLAIN_NX", "PLAIN_UNKNOWNS",
@@ -178,8 +178,6 @@ class Range:
 SPEED = Range("omega_bar", 0.0, 50.0, lo_open=True, what="dimensionless speed Omega_bar = Omega t*")
 #: Speed step of a march in speed (optimised continuation).
 SPEED_STEP = Range("d_omega", 0.0, 1.0, lo_open=True, what="speed step in Omega_bar")
-#: A shaft speed in rev/min to convert (any finite number; the converted speed is checked against SPEED).
-RPM = Range("rpm", None, None, unit="rev/min")
 #: Extra static specific load per bearing beyond gravity, ``W / (p0 L D)``.  20 is far beyond what a film of
 #: ``h > 0`` carries at the speeds above (the static solver reports "contact" well before).
 LOAD_W = Range("w", 0.0, 20.0, what="extra specific load W/(p0 L D) per bearing")

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -284,6 +285,12 @@ class Params(eqx.Module):
     Nz: int = eqx.field(static=True)
     rotor: str = eqx.field(static=True, default="jeffcott")
     gumbel_width: float = eqx.field(static=True, default=0.0)
+
+    def traced(self) -> "Params":
+        """These parameters with every float leaf a 0-d float64 JAX array: ``equinox.filter_jit`` treats Python
+        floats as static, so a solver called for many values of a parameter (a load ramp, several alpha_f) would
+        recompile each time; array leaves are traced and compile once per grid."""
+        return jax.tree_util.tree_map(lambda v: jnp.asarray(v, jnp.float64), self)
 
     def check(self) -> "Params":
         """Check the physical fields of concrete parameters against :mod:`gfbjax.limits` and return ``self``.

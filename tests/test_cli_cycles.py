@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from gfbjax import reference_system
 from gfbjax.cli import main
 
 TINY = ["--nx", "16", "--nz", "2", "--N", "8", "--m", "3"]
@@ -71,6 +72,13 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
         assert (out / name).stat().st_size > 0, name
     meta = json.loads((out / "branch.json").read_text())  # plain json, no gfbjax
     assert meta["kind"] == "cycles" and isinstance(meta["special"], list)
+    # self-describing: the system with its conventions, the grid, component names, units, rpm conversion
+    spec = reference_system(Nx=16, Nz=2)
+    assert meta["format"] == "gfbjax.cont.Branch" and meta["meta"]["spec"]["Nx"] == 16
+    assert meta["meta"]["spec"]["alpha_f"] == spec.alpha_f and meta["meta"]["problem"] == "unbalance_response"
+    assert meta["meta"]["grid"] == {"Nx": 16, "Nz": 2, "n_theta": 15, "n_pressure": 30}
+    assert meta["meta"]["rpm_per_omega_bar"] == pytest.approx(spec.rpm(1.0))
+    assert meta["component_names"] == ["x_j", "y_j", "x_d", "y_d"] and "Omega_bar" in meta["units"]["lam"]
     with np.load(out / "branch.npz") as z:
         lam = z["lam"]
         assert z["xmax"].shape[0] == lam.size >= 2
@@ -85,7 +93,7 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
     # the branch file is what `gfbjax runup --cycles` overlays on the run-up (paper Fig. 7a/b)
     from gfbjax.cli.commands.runup import _cycle_overlay
 
-    ov = _cycle_overlay(str(out / "branch.npz"))
+    ov = _cycle_overlay(str(out / "branch.npz"), spec, "reference")
     np.testing.assert_array_equal(ov["speed"], lam)
     assert ov["y_max"].shape == ov["y_min"].shape == lam.shape
     assert np.all(ov["y_max"] >= ov["y_min"]) and np.all(ov["x_max"] >= ov["x_min"])
@@ -94,7 +102,7 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
 def test_runup_bad_cycles_file_exits_2_before_integrating(tmp_path, capsys):
     code, _, err = _run(["runup", *TINY[:4], "--cycles", str(tmp_path / "missing.npz"), "--out", str(tmp_path)],
                         capsys)
-    assert code == 2 and "--cycles" in err
+    assert code == 2 and "--cycles" in err and "missing.npz" in err and len(err.strip().splitlines()) == 1
 
 
 def test_equilibria_hopf_cycles_tiny_run(tmp_path, capsys):
@@ -109,6 +117,10 @@ def test_equilibria_hopf_cycles_tiny_run(tmp_path, capsys):
     assert hc["points"] >= 2 and hc["criticality"] in ("subcritical", "supercritical", "undetermined")
     for name in ["hopf_cycles.npz", "hopf_cycles.json", "hopf_cycles.png"]:
         assert (out / name).is_file(), name
+    for name, problem in (("branch.json", "equilibria"), ("hopf_cycles.json", "self_excited")):
+        meta = json.loads((out / name).read_text())["meta"]
+        assert meta["problem"] == problem and meta["spec"]["rotor"] == "rigid" and meta["grid"]["Nx"] == 16
+        assert meta["rpm_per_omega_bar"] > 0
     assert "Hopf cycles" in stdout
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import gfbjax
 from gfbjax import cont
-from gfbjax.cont import collocation as col
+from gfbjax.cont import _collocation as col
 from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
 from gfbjax.analyses.energy import branch_energy, cycle_energy, sign_changes
 from gfbjax.model import layout

@@ -15,7 +15,6 @@ from gfbjax.analyses.signals import classify_response, spectrum
 from gfbjax.analyses.transient import (
     TransientResult,
     TransientSettings,
-    as_traced,
     jacobian_coloring,
     run_up,
     simulate,
@@ -28,12 +27,12 @@ SETTINGS = TransientSettings(rtol=1e-6, atol=1e-8, samples_per_rev=32, chunk_rev
 
 @pytest.fixture(scope="module")
 def ref_params():
-    return as_traced(gfbjax.reference_system(**GRID).nondim())
+    return gfbjax.reference_system(**GRID).nondim().traced()
 
 
 @pytest.fixture(scope="module")
 def g0_params():
-    return as_traced(gfbjax.variation("G0", **GRID).nondim())
+    return gfbjax.variation("G0", **GRID).nondim().traced()
 
 
 @pytest.fixture(scope="module")

@@ -27,8 +27,8 @@ import numpy as np
 from .. import cont
 from ..model import core_rates, layout, vector_field
 from ..model.pattern import jacobian_sparsity
-from ..params import ParameterError, Params
-from ..params import SystemSpec
+from .. import limits
+from ..params import ParameterError, Params, SystemSpec
 from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
@@ -118,12 +118,14 @@ def default_cycle_settings(**changes: Any) -> cont.CycleSettings:
     return cont.CycleSettings(**base)
 
 
-def _check_speed_range(omega_start: float, omega_end: float) -> None:
-    for name, v in (("omega_start", omega_start), ("omega_end", omega_end)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= 50.0):
-            raise ParameterError(f"{name} = {v!r} is outside the allowed range (0, 50] (Omega_bar)")
+def _check_speed_range(params: Params, omega_start: float, omega_end: float) -> tuple[float, float]:
+    """The checked speeds (Python floats); ParameterError for a bad Params or speed, before any work."""
+    params.check()
+    omega_start = limits.SPEED.check(omega_start, "omega_start")
+    omega_end = limits.SPEED.check(omega_end, "omega_end")
     if omega_start == omega_end:
         raise ParameterError("omega_start and omega_end must differ")
+    return omega_start, omega_end
 
 
 def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
@@ -142,7 +144,7 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     and the rpm conversion; ``component_names`` are x_j, y_j (, x_d, y_d); ``units`` those of each array.
     ParameterError when ``spec`` is not the system of ``params``.
     """
-    _check_speed_range(omega_start, omega_end)
+    omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
                              "and start cycles from its Hopf point")
@@ -198,7 +200,7 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
 
     The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``);
     ``kw`` goes to :func:`gfbjax.cont.continue_equilibria` (``callback``, ``progress``)."""
-    _check_speed_range(omega_start, omega_end)
+    omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
     meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:

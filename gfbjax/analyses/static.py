@@ -27,7 +27,7 @@ from jax import Array
 from .. import cont
 from ..model import balanced_vector_field, film, layout
 from .. import limits
-from ..params import ParameterError, Params, SystemSpec
+from ..params import Params, SystemSpec
 
 __all__ = ["StaticResult", "newton_solve", "solve_equilibrium", "load_displacement",
            "with_load"]
@@ -43,11 +43,6 @@ def with_load(params: Params, w: float | Array, scale: float | Array = 1.0) -> P
 
 
 _jacobian = eqx.filter_jit(jax.jacfwd(balanced_vector_field))
-
-
-def _as_arrays(params: Params) -> Params:
-    """Float leaves as float64 arrays, so that ``filter_jit`` traces rather than bakes them in."""
-    return jax.tree_util.tree_map(lambda v: jnp.asarray(v, jnp.float64), params)
 
 
 def _h_min(s: Array, params: Params) -> Array:
@@ -250,7 +245,7 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
 
     Args:
         params: dimensionless system (``SystemSpec.nondim()``).
-        omega: speed Omega_bar in (0, 50].
+        omega: speed Omega_bar in (0, 50] (:data:`gfbjax.limits.SPEED`).
         w: extra vertical specific load per bearing ``W/(p0 L D)`` in [0, 20].
         guess: a core state to start from, e.g. the equilibrium at a nearby speed, or at the load ``guess_w``.
         guess_w: the load at which ``guess`` is an equilibrium; the load is then ramped from ``guess_w`` to ``w``.
@@ -265,7 +260,7 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         ``outcome == "contact"`` and the last converged (partially loaded) state.
     """
     omega, w, guess_w = _check_inputs(params, omega, w, guess_w)
-    params = _as_arrays(params)
+    params = params.traced()
     omega_a = jnp.asarray(float(omega))
     iters = 0
     if guess is not None:

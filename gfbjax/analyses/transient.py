@@ -68,7 +68,6 @@ __all__ = [
     "check_simulate",
     "check_run_up",
     "default_initial_state",
-    "as_traced",
     "outputs_of",
 ]
 
@@ -274,11 +273,6 @@ def _json_default(o: Any) -> Any:
 # -- helpers ---------------------------------------------------------------------------------------------------------
 
 
-def as_traced(params: Params) -> Params:
-    """Params with every float leaf as a JAX array, so that jitted solvers are traced (not recompiled) per value."""
-    return jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=jnp.float64), params)
-
-
 def outputs_of(s: Array, params: Params) -> tuple[Array, Array]:
     """(rotor states, minimum film thickness) of a state vector; works on a batch of states too."""
     lay = layout(params)
@@ -292,7 +286,7 @@ def default_initial_state(params: Params, omega: float) -> tuple[np.ndarray, str
     the start of a run, and a note on it."""
     from .static import solve_equilibrium
 
-    res = solve_equilibrium(as_traced(params), float(omega))
+    res = solve_equilibrium(params.traced(), float(omega))
     note = f"started from the static equilibrium at Omega_bar = {omega:g} ({res.outcome})"
     return np.asarray(res.state), note
 
@@ -422,7 +416,7 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
     """Integrate from ``tau = 0`` to ``tau_end`` saving every ``dtau``, in chunks of ``settings.chunk_revs``."""
     from tqdm.auto import tqdm
 
-    params = as_traced(params)
+    params = params.traced()
     lay = layout(params)
     y0 = np.asarray(y0, dtype=np.float64)
     if y0.shape != (lay.n_core,):
@@ -673,7 +667,7 @@ def simulate(params: Params, omega: float, *, revolutions: float | None = None, 
 
     Args:
         params: dimensionless system (``SystemSpec.nondim()``).
-        omega: speed Omega_bar in (0, 50].
+        omega: speed Omega_bar in (0, 50] (:data:`gfbjax.limits.SPEED`).
         revolutions: length of the run in revolutions (default 100), in (0, 1e6]; or give ``tau_end``.
         tau_end: length of the run in dimensionless time tau (instead of ``revolutions``).
         s0: core state to start from; default the static equilibrium of the balanced system at ``omega``.
@@ -705,7 +699,7 @@ def run_up(params: Params, omega_start: float, omega_end: float, *, accel: float
 
     Args:
         params: dimensionless system.
-        omega_start, omega_end: speed range, Omega_bar in (0, 50].
+        omega_start, omega_end: speed range, Omega_bar in (0, 50] (:data:`gfbjax.limits.SPEED`).
         accel: angular acceleration ``a_bar`` per tau^2 (its sign must match the direction), ``|accel|`` in
             (0, 100] and implying at most 1e6 revolutions; or give
         revolutions: revolutions from start to end (default 300), in (0, 1e6], which set ``accel`` by

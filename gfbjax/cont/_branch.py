@@ -192,7 +192,12 @@ class Branch:
         Raises :class:`BranchFileError` (one line: the file and what is wrong) for a missing ``.json`` or
         ``.npz``, a truncated or corrupt npz, JSON that is not a branch sidecar (another format, missing keys,
         wrong types) and arrays whose lengths or widths disagree with each other or with the JSON."""
+        if Path(path).is_dir():
+            raise BranchFileError(f"{path}: a folder, not a branch file (pass the branch in it, e.g. "
+                                  f"{Path(path) / 'branch.npz'})")
         npz, js = _paths(path)
+        if not npz.is_file() and not js.is_file():
+            raise BranchFileError(f"{path}: no such branch file (neither {npz.name} nor {js.name} exists)")
         head = _read_head(js, npz)
         data = _read_npz(npz)
         return _build(cls, head, data, npz, js)
@@ -291,9 +296,17 @@ class Branch:
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write :meth:`to_xarray` to a netCDF-3 file with the scipy engine (no netCDF library needed); read it
-        back with ``xarray.open_dataset(path)``.  Returns the path."""
+        back with ``xarray.open_dataset(path)``.  Returns the path.
+
+        netCDF-3 takes a dimension of length 0 for its one unlimited dimension, so for an empty branch ``point``
+        is written as that, and the variables on other empty dimensions (no multipliers, no components: they
+        hold no values) are left out."""
         path = Path(path)
-        self.to_xarray().to_netcdf(path, engine="scipy")
+        ds = self.to_xarray()
+        empty = [d for d, size in ds.sizes.items() if size == 0 and d != "point"]
+        if empty:
+            ds = ds.drop_dims(empty)
+        ds.to_netcdf(path, engine="scipy", unlimited_dims=["point"] if len(self) == 0 else None)
         return path
 
 

@@ -14,7 +14,8 @@ Iteration (one call of ``linearise`` per iteration; after a small step one more 
     if rnorm or |dx| is not finite:   NONFINITE       (x is the last finite iterate)
     if |dx| > divergence * min|dx|:   DIVERGED        (after two steps at least)
     if max_iter steps were taken:     MAX_ITERATIONS
-    t = damping(x, dx, aux)           (1 by default; 0 means no acceptable step: NONFINITE)
+    t = damping(x, dx, aux)           (1 by default, and 1 for a step already small; 0: no acceptable
+                                       step, NONFINITE)
     x <- x + t dx;  small step when t == 1 and |dx| <= atol_step + rtol_step * scale(x)
 
 With ``verify_residual=False`` a small full step converges at once (no extra evaluation): for solvers whose
@@ -129,8 +130,9 @@ def _advance(s: _State, rnorm, dx, t_fn, aux, scale_fn, cfg: NewtonSettings) -> 
     finite = jnp.isfinite(rnorm) & jnp.isfinite(dnorm)
     diverged = (s.it >= 2) & (dnorm > cfg.divergence * s.best)
     exhausted = s.it >= cfg.max_iter
-    t = t_fn(s.x, dx, aux)
-    no_step = ~(t > 0.0)
+    # a step that already passes the small-step test is taken in full: damping compares rounding noise there
+    t = jnp.where(dnorm <= cfg.atol_step + cfg.rtol_step * scale_fn(s.x), 1.0, jnp.asarray(t_fn(s.x, dx, aux)))
+    no_step = jnp.logical_not(t > 0.0)
     code = jnp.where(converged, Outcome.CONVERGED.code,
            jnp.where(~finite, Outcome.NONFINITE.code,
            jnp.where(diverged, Outcome.DIVERGED.code,

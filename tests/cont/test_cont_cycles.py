@@ -55,6 +55,18 @@ def test_save_load_roundtrip_plain_numpy(sl_branch, tmp_path):
     for k in ("lam", "period", "l2", "xmax", "xmin", "multipliers", "stable", "newton_iterations", "ds"):
         assert np.array_equal(getattr(back, k), getattr(sl_branch, k)), k
     assert back.outcome is sl_branch.outcome and back.message == sl_branch.message and back.m == 4
+    assert meta["format"] == "gfbjax.cont.Branch" and meta["points"] == len(sl_branch) and back.meta == {}
+
+
+def test_save_load_keeps_description(sl_branch, tmp_path):
+    """meta, component names and units travel in the JSON sidecar; the engine itself writes no meta."""
+    import dataclasses
+
+    br = dataclasses.replace(sl_branch, component_names=["x", "y"], units={"lam": "1"},
+                             meta={"system": "Stuart-Landau", "w": W, "nested": {"a": [1, 2]}})
+    br.save(tmp_path / "d")
+    back = Branch.load(tmp_path / "d.json")
+    assert back.meta == br.meta and back.component_names == ["x", "y"] and back.units == {"lam": "1"}
 
 
 def test_restart_from_saved_point(sl_branch):

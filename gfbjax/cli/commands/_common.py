@@ -158,15 +158,8 @@ def spec_from_args(args: argparse.Namespace) -> SystemSpec:
 
 
 def traced_params(spec: SystemSpec):
-    """``spec.nondim()`` with every float leaf turned into a JAX array.
-
-    ``eqx.filter_jit`` treats Python floats as static, so solving for many values of a parameter (a load ramp,
-    several alpha_f) would recompile each time; array leaves are traced and compile once per grid.
-    """
-    import jax
-    import jax.numpy as jnp
-
-    return jax.tree_util.tree_map(jnp.asarray, spec.nondim())
+    """``spec.nondim()`` with every float leaf a JAX array (:meth:`gfbjax.Params.traced`)."""
+    return spec.nondim().traced()
 
 
 def output_dir(args: argparse.Namespace) -> Path:
