@@ -19,7 +19,7 @@ import numpy as np
 from . import _collocation as col
 from ._branch import Branch, PointRecord
 from ._driver import Curve, continue_curve
-from ._events import cycle_test_functions, detect, double_orbit_pd, ns_angle
+from ._events import classify, cycle_test_functions, detect, double_orbit_pd
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._linear import BoundSolver, Linearisation, choose_solver
 from ._problem import CycleProblem
@@ -196,11 +196,9 @@ class CycleCurve(Curve):
     def state(self, X):
         return _orbit_state(X)
 
-    def special(self, kind, X, an):
-        out: dict[str, Any] = {"period": float(X.T)}
-        if kind == "NS":
-            out["angle"] = ns_angle(an["spectrum"], self.problem.n_trivial)
-        return out
+    def special(self, kind, X, an, located=True):
+        c = classify(kind, an["spectrum"], self.problem.n_trivial)
+        return None if c is None else {"period": float(X.T), **c}
 
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         shared = {"mesh": self._mesh} if settings.save_states else None

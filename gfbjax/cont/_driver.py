@@ -13,7 +13,10 @@ One step from a converged point :math:`X_k` with unit tangent :math:`\tau_k`:
 3. analyse the new point, evaluate the test functions, and for each event between the two points localise it:
    the Illinois regula falsi in the arclength ``s`` from the left point, each evaluation a full correction at
    ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual;
-4. record, call the callback, check the bounds; grow ds after a fast correction.
+4. record, call the callback; grow ds after a fast correction.
+
+A step that reaches or crosses ``lam_min``/``lam_max`` is replaced by a correction at lam = the bound (from the
+secant): the last point lies on the bound, and no point or event beyond it is recorded (``REACHED_END``).
 
 Whatever ends the branch, the points computed so far are returned in a :class:`~._branch.Branch` with its
 :class:`~._results.Outcome`.  KeyboardInterrupt (and SIGTERM, where the caller maps it to KeyboardInterrupt) ends
@@ -80,8 +83,10 @@ class Curve(abc.ABC):
     def state(self, X: Any) -> dict[str, np.ndarray]: ...
 
     @abc.abstractmethod
-    def special(self, kind: str, X: Any, analysis: dict[str, Any]) -> dict[str, Any]:
-        """Type-specific fields of a special point (``period``, ``angle``, ``omega``)."""
+    def special(self, kind: str, X: Any, analysis: dict[str, Any], located: bool = True) -> dict[str, Any] | None:
+        """Type-specific fields of a special point (``period``, ``angle``, ``omega``), or None when the sign change
+        of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
+        False: X is the first point past the event, not the event itself."""
 
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         return Branch.from_points(self.kind, self.components, points, special, special_states, outcome, message)
@@ -94,7 +99,9 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
     """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
 
     ``g(s)`` returns (value, payload) and may return (nan, None) on failure.  Returns (s, payload, value,
-    converged); not converged (and no evaluation) when g_lo and g_hi do not bracket a zero.
+    located): located when |g| <= tol, or when the bracket has shrunk below s_tol * s_hi with |g| below 1e-6 of
+    its end values (a continuous root); not located when g jumps across a closed bracket, when g_lo and g_hi do
+    not bracket a zero (no evaluation then) or when the iteration budget runs out.
     """
     a, b, ga, gb = 0.0, float(s_hi), float(g_lo), float(g_hi)
     if not (np.sign(ga) * np.sign(gb) <= 0):
@@ -115,8 +122,13 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
             if not np.isfinite(gs):
                 return best[0], best[1], best[2], False
         best = (s, payload, gs)
-        if abs(gs) <= tol or abs(b - a) <= s_tol * max(1.0, abs(s_hi)):
+        if abs(gs) <= tol:
             return s, payload, gs, True
+        if abs(b - a) <= s_tol * max(1.0, abs(s_hi)):
+            # The bracket closed.  A continuous test function is then tiny next to its values at the ends; one that
+            # jumps across the bracket (a critical eigenvalue swapping, a discontinuous model) is not: bracketed,
+            # not located.
+            return s, payload, gs, abs(gs) <= 1e-6 * max(abs(g_lo), abs(g_hi))
         if np.sign(gs) == np.sign(gb):
             b, gb = s, gs
             if side == -1:
@@ -203,6 +215,14 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
         Xn, tau_n = sol.x, sol.aux
         if direction is None:  # natural parameter: orient the corrector's tangent by the stepping direction
             tau_n = c.scale(tau_n, float(s.direction))
+        bound = _crossed_bound(s, c.lam(X), c.lam(Xn))
+        if bound is not None:  # place the last point on the bound: nothing is recorded or detected beyond it
+            placed = _on_bound(c, X, Xn, tau, bound)
+            if placed is None:
+                return Outcome.REACHED_END, (f"lam = {c.lam(Xn):.6g} left [lam_min, lam_max] = [{s.lam_min:g}, "
+                                             f"{s.lam_max:g}]; the point on the bound did not converge")
+            sol, lin, tau_n = placed
+            Xn = sol.x
         an_n = c.analyse(Xn, lin)
         tests_n = c.tests(an_n, run.tangent_lam(tau_n))
         if tests is not None and s.detect:
@@ -211,12 +231,38 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
         if not run.add_point(c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))):
             return Outcome.STOPPED, "stopped by the callback"
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
-        lam = c.lam(Xn)
-        if not (s.lam_min <= lam <= s.lam_max):
-            return Outcome.REACHED_END, f"lam = {lam:.6g} left [lam_min, lam_max] = [{s.lam_min:g}, {s.lam_max:g}]"
+        if bound is not None:
+            return Outcome.REACHED_END, f"lam = {bound:.6g} reached (bounds [lam_min, lam_max] = [{s.lam_min:g}, " \
+                                        f"{s.lam_max:g}])"
         if int(sol.iterations) <= s.fast_iter:
             ds = min(ds * s.grow, s.ds_max)
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
+
+
+def _crossed_bound(s: Any, lam0: float, lam1: float) -> float | None:
+    """The bound of [lam_min, lam_max] that the step lam0 -> lam1 reached or crossed, if any."""
+    if lam1 >= s.lam_max > -np.inf and lam0 < s.lam_max:
+        return float(s.lam_max)
+    if lam1 <= s.lam_min < np.inf and lam0 > s.lam_min:
+        return float(s.lam_min)
+    if not (s.lam_min <= lam1 <= s.lam_max):  # started outside the bounds
+        return float(np.clip(lam1, s.lam_min, s.lam_max))
+    return None
+
+
+def _on_bound(c: Curve, X: Any, Xn: Any, tau: Any, bound: float):
+    """Correct at lam = bound from the secant between X and Xn: (solution, linearisation, tangent oriented like
+    ``tau``), or None when it does not converge."""
+    lam0, lam1 = c.lam(X), c.lam(Xn)
+    w = (bound - lam0) / (lam1 - lam0) if lam1 != lam0 else 1.0
+    pred = c.add(X, c.scale(c.add(Xn, c.scale(X, -1.0)), w))
+    sol, lin = c.correct(pred, c.natural_constraint(pred, bound))
+    if not sol.converged:
+        return None
+    t = sol.aux
+    if tau is not None and c.inner(t, tau) < 0:
+        t = c.scale(t, -1.0)
+    return sol, lin, t
 
 
 def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
@@ -238,11 +284,15 @@ def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
         if payload is not None and located:
             sol, an, tl = payload
             point, residual = sol.x, float(val)
-            run.points.append(c.record(point, an, int(sol.iterations), sv, tl))
         else:
             located = False
+    extra = c.special(kind, point, an, located)
+    if extra is None:  # the test function changed sign, but not at a bifurcation (module docstring of the curve)
+        return
+    if located:
+        run.points.append(c.record(point, an, int(sol.iterations), sv, tl))
     run.special_states.append(c.state(point))
     run.special.append(SpecialPoint(type=kind, lam=float(c.lam(point)),
                                     index=len(run.points) - 1 if located else len(run.points),
                                     spectrum=np.asarray(an["spectrum"]), located=bool(located), residual=residual,
-                                    state=len(run.special_states) - 1, **c.special(kind, point, an)))
+                                    state=len(run.special_states) - 1, **extra))

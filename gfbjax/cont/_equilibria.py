@@ -9,8 +9,11 @@ bordered system :math:`f(x,\lambda) = 0,\ \langle y - y_k, v\rangle - \Delta s =
 Eigenvalues of :math:`f_x` are computed at every point.  Test functions:
 
 * fold (limit point): the lam-component of the tangent changes sign;
-* Andronov-Hopf: :math:`\psi_H = \max \operatorname{Re}\mu` over the eigenvalues with non-zero imaginary part
-  changes sign (neutral saddles, real pairs :math:`\pm\kappa`, are thereby excluded).
+* Andronov-Hopf: :math:`\psi_H`, the sign of :math:`\prod_{i<j} (\mu_i + \mu_j)/(|\mu_i| + |\mu_j|)` over all
+  eigenvalue pairs (the bialternate product of :math:`f_x`) times its two smallest factors
+  (:func:`._events.signed_min`): continuous, and of changing sign whenever any pair crosses the imaginary axis,
+  whatever else is already unstable.  It also vanishes at a neutral saddle (real pair :math:`\pm\kappa`): a sign
+  change is reported as HOPF only when the pair with the smallest factor is complex (its omega is reported).
 
 :func:`hopf_point` returns :math:`(\lambda, x, \omega, v)` with :math:`f_x v = i\omega v`, used by
 :func:`._cycles.start_from_hopf`.
@@ -27,6 +30,7 @@ import numpy as np
 
 from ._branch import Branch, PointRecord
 from ._driver import Curve, continue_curve
+from ._events import signed_min
 from ._newton import NewtonSettings, solve as newton_solve
 from ._problem import EquilibriumProblem
 from ._settings import EquilibriumSettings
@@ -81,6 +85,13 @@ def _eig(problem: EquilibriumProblem, y: np.ndarray):
     return ev[o], V[:, o]
 
 
+def _hopf_factors(ev: np.ndarray):
+    """(mu_i + mu_j) / (|mu_i| + |mu_j|) over all pairs i < j of eigenvalues, and the pair indices."""
+    ev = np.asarray(ev, complex)
+    i, j = np.triu_indices(len(ev), 1)
+    return (ev[i] + ev[j]) / (np.abs(ev[i]) + np.abs(ev[j]) + 1e-300), i, j
+
+
 class EquilibriumCurve(Curve):
     kind = "equilibria"
 
@@ -120,9 +131,7 @@ class EquilibriumCurve(Curve):
         return {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan")}
 
     def tests(self, an, tangent_lam):
-        ev = an["spectrum"]
-        c = ev[np.abs(ev.imag) > IMAG_TOL * np.maximum(1, np.abs(ev))]
-        return {"FOLD": float(tangent_lam), "HOPF": float(np.max(c.real)) if len(c) else -np.inf}
+        return {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0])}
 
     def events(self, prev, cur, kinds):
         return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
@@ -138,12 +147,19 @@ class EquilibriumCurve(Curve):
     def state(self, y):
         return {"x": np.asarray(y[:-1]).copy(), "lam": np.asarray(y[-1])}
 
-    def special(self, kind, y, an):
+    def special(self, kind, y, an, located=True):
         if kind != "HOPF":
             return {}
         ev = an["spectrum"]
-        c = ev[np.abs(ev.imag) > IMAG_TOL]
-        omega = float(abs(c[np.argmin(np.abs(c.real))].imag))
+        f, i, j = _hopf_factors(ev)
+        # At a located point the crossing pair has the (near) zero factor.  At an unlocated one (the point after
+        # the crossing) a slow pair far from the axis in relative terms can have a smaller normalised factor than
+        # the pair that just crossed, so there the pair with the smallest sum |mu_i + mu_j| is taken.
+        k = int(np.argmin(np.abs(f) if located else np.abs(ev[i] + ev[j])))
+        a, b = ev[i[k]], ev[j[k]]
+        if not (abs(a.imag) > IMAG_TOL * max(1.0, abs(a)) and abs(a - np.conj(b)) <= 1e-6 * max(1.0, abs(a))):
+            return None  # a real pair +-kappa (neutral saddle): no Hopf bifurcation
+        omega = float(abs(a.imag))
         return {"omega": omega, "period": 2 * np.pi / omega}
 
 

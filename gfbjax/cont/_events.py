@@ -1,25 +1,26 @@
-r"""Bifurcations of cycles: test functions, localisation, period-doubling switch.
+r"""Bifurcations of cycles: continuous test functions, their classification, the period-doubling switch.
 
-Test functions along a branch of cycles (trivial multiplier(s) closest to +1
-removed first, see ``floquet.nontrivial``):
+Test functions along a branch of cycles, on the non-trivial multipliers (the ``n_trivial`` closest to +1 removed,
+see ``_floquet.nontrivial``); each is a continuous function of the multipliers whose sign changes at the event,
+so that crossings are found whatever else is already unstable, and nothing is inferred from counting multipliers
+on one side of a line:
 
-* **LPC** (fold of cycles): the lam-component of the normalised tangent
-  :math:`\dot\lambda` changes sign.
-* **PD** (flip): a real multiplier crosses -1.  Detected by a change of the
-  number of real multipliers below -1; localised on
-  :math:`\psi_{PD} = \prod_{\mu\ real} (\mu + 1) \prod_{\mu\ complex} |\mu + 1|`,
-  i.e. :math:`\det(M + I)` over the non-trivial multipliers: continuous, and of
-  changing sign both in the generic flip and where a complex pair meets at -1
-  and splits into -r, -1/r (Hamiltonian or parametric resonance, e.g. the
-  Mathieu tongues), where the multiplier closest to -1 never crosses it.
-* **NS** (Neimark-Sacker / torus): a complex pair crosses :math:`|\mu| = 1`.
-  Detected by a change of the number of complex multipliers outside the unit
-  circle, localised on :math:`\psi_{NS} = |\mu_c| - 1` for the complex
-  multiplier closest to the circle; the angle :math:`\arg\mu_c \in (0,\pi)`
-  is reported.  Pairs with :math:`|\arg\mu| <` ``NS_MIN_ANGLE`` count as real:
-  next to a Hopf point a cycle has a second multiplier near +1, and the nearly
-  defective pair it forms with the trivial one splits into a spurious complex
-  pair of tiny argument (a 1:1 resonance, not a torus).
+* **LPC** (fold of cycles): the lam-component of the unit tangent :math:`\dot\lambda`.
+* **PD** (flip): the sign of :math:`\prod_i (\mu_i + 1)/(|\mu_i| + 1)`, i.e. of :math:`\det(M + I)` over the
+  non-trivial multipliers, times its two smallest factors (:func:`signed_min`: continuous, no underflow for
+  many multipliers).  Its sign changes when a real multiplier crosses -1, and where a complex pair meets at -1 and
+  splits into -r, -1/r (parametric resonance, e.g. the Mathieu tongues).  Two real multipliers below -1 that
+  merge into a complex pair (or the reverse) leave it unchanged: no PD.
+* **NS** (Neimark-Sacker / torus): the same for :math:`\prod_{i<j} (\mu_i\mu_j - 1)/(|\mu_i\mu_j| + 1)` over
+  the non-trivial pairs (the bialternate product of M): zero when a complex pair crosses the unit circle
+  (:math:`\mu\bar\mu = 1`), unchanged when multipliers collide on the real axis.  It also vanishes for two real
+  multipliers with product 1 (a neutral saddle, not a bifurcation): :func:`classify` reports an NS only when the
+  pair with product closest to 1 is complex, with its angle :math:`\arg\mu \in (0, \pi)`.
+
+The set of non-trivial multipliers is made closed under conjugation first: next to a Hopf point the trivial
+multiplier and the amplitude multiplier form a nearly defective pair that round-off can split into
+:math:`1 \pm i\epsilon`; removing one of them leaves a lone complex value, which is replaced by a real one of the
+same modulus (a 1:1 resonance, not a torus).
 
 Localisation is the driver's (:func:`._driver.locate`).
 """
@@ -33,46 +34,73 @@ import numpy as np
 from . import _collocation as col
 from ._floquet import nontrivial
 
-IMAG_TOL = 1e-7
-NS_MIN_ANGLE = 1e-2  # rad
+IMAG_TOL = 1e-7  # relative imaginary part below which a multiplier is real
 
 
-def _is_real(mu: np.ndarray) -> np.ndarray:
-    return (np.abs(mu.imag) <= IMAG_TOL * np.maximum(1.0, np.abs(mu))) | (np.abs(np.angle(mu)) < NS_MIN_ANGLE)
+def _conjugate_closed(nt: np.ndarray) -> np.ndarray:
+    """``nt`` with every complex value whose conjugate is missing replaced by a real one of the same modulus."""
+    nt = np.asarray(nt, complex).copy()
+    scale = np.maximum(1.0, np.abs(nt))
+    for i, z in enumerate(nt):
+        if abs(z.imag) > IMAG_TOL * scale[i] and not np.any(np.abs(nt - np.conj(z)) <= 1e-8 * scale[i]):
+            nt[i] = np.sign(z.real or 1.0) * abs(z)
+    return nt
+
+
+def _pair_products(nt: np.ndarray) -> np.ndarray:
+    i, j = np.triu_indices(len(nt), 1)
+    return nt[i] * nt[j]
+
+
+def signed_min(factors: np.ndarray) -> float:
+    """A continuous stand-in for the real product of ``factors`` (a set closed under conjugation, each of modulus
+    about 1 or less): its sign times the product of the two smallest moduli.  The product of thousands of factors
+    underflows, and its magnitude says nothing near a root; the sign (from the sum of the arguments) flips exactly
+    when a factor passes through zero, and the two smallest moduli are continuous there.  Two, because a complex
+    pair whose product is the event (two multipliers meeting at -1 and splitting on the real axis, as in the
+    Mathieu tongues) contributes two factors that vanish together like the square root of the parameter: their
+    product is then linear in it, as the full product is."""
+    f = np.asarray(factors, complex)
+    if f.size == 0:
+        return 1.0
+    sign = 1.0 if np.cos(np.sum(np.angle(f))) >= 0.0 else -1.0
+    return sign * float(np.prod(np.sort(np.abs(f))[:2]))
 
 
 def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> dict[str, float]:
-    """Counts (n_pd, n_ns) and continuous test functions (LPC, PD, NS)."""
-    nt = nontrivial(mu, n_trivial)
-    real = _is_real(nt)
-    neg = nt[real & (nt.real < 0)].real
-    cplx = nt[~real]
-    psi_pd = float(np.prod(nt[real].real + 1.0) * np.prod(np.abs(cplx + 1.0)))
-    psi_ns = float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]) - 1.0) if len(cplx) else -1.0
-    return {"LPC": float(tangent_lam), "PD": psi_pd, "NS": psi_ns,
-            "n_pd": int(np.sum(neg < -1.0)), "n_ns": int(np.sum(np.abs(cplx) > 1.0))}
+    """The continuous test functions LPC, PD and NS of one point (module docstring)."""
+    nt = _conjugate_closed(nontrivial(mu, n_trivial))
+    pp = _pair_products(nt)
+    return {"LPC": float(tangent_lam),
+            "PD": signed_min((nt + 1.0) / (np.abs(nt) + 1.0)),
+            "NS": signed_min((pp - 1.0) / (np.abs(pp) + 1.0))}
 
 
 def detect(prev: dict[str, float], cur: dict[str, float], kinds: tuple[str, ...]) -> list[str]:
-    """Bifurcation types crossed between two consecutive points."""
-    out = []
-    if "LPC" in kinds and np.sign(prev["LPC"]) * np.sign(cur["LPC"]) < 0:
-        out.append("LPC")
-    if "PD" in kinds and prev["n_pd"] != cur["n_pd"]:
-        out.append("PD")
-    if "NS" in kinds and prev["n_ns"] != cur["n_ns"]:
-        out.append("NS")
-    return out
+    """The test functions among ``kinds`` whose sign changed between two consecutive points."""
+    return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k]) and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+
+
+def classify(kind: str, mu: np.ndarray, n_trivial: int) -> dict[str, Any] | None:
+    """Type-specific data of an event at multipliers ``mu``, or None when the sign change is not a bifurcation:
+    for NS, the pair whose product is closest to 1 must be complex (else a neutral saddle); its angle is
+    returned."""
+    if kind != "NS":
+        return {}
+    nt = _conjugate_closed(nontrivial(mu, n_trivial))
+    if len(nt) < 2:
+        return None
+    i, j = np.triu_indices(len(nt), 1)
+    k = int(np.argmin(np.abs(nt[i] * nt[j] - 1.0)))
+    a, b = nt[i[k]], nt[j[k]]
+    complex_pair = abs(a.imag) > IMAG_TOL * max(1.0, abs(a)) and abs(a - np.conj(b)) <= 1e-6 * max(1.0, abs(a))
+    return {"angle": float(abs(np.angle(a)))} if complex_pair else None
 
 
 def ns_angle(mu: np.ndarray, n_trivial: int) -> float:
-    """arg of the complex multiplier closest to the unit circle, in (0, pi)."""
-    nt = nontrivial(mu, n_trivial)
-    cplx = nt[~_is_real(nt)]
-    if not len(cplx):
-        return float("nan")
-    c = cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]
-    return float(abs(np.angle(c)))
+    """arg of the complex multiplier of the pair whose product is closest to 1, in (0, pi); NaN if none."""
+    c = classify("NS", mu, n_trivial)
+    return float("nan") if c is None else c["angle"]
 
 
 def double_orbit_pd(f: Any, args: Any, orbit: col.Orbit, scheme: col.Scheme,

@@ -69,3 +69,52 @@ def correct(f, args, orbit, con=None, *, max_iter=12, tol=1e-10):
                              newton_max_iter=max_iter, fast_iter=min(3, max_iter), linear_solver=DenseCondensation())
     sol, _ = correct_cycle(CycleProblem(f, orbit.n, args), orbit, con, settings=settings)
     return sol
+
+
+def half_turn_field(x, lam, p):
+    """A stable unit-circle oscillator (u, v) with frequency w, driving a linear planar system z that turns by
+    half a revolution per period, in 4 states.  p = (w, gamma0, dgamma, delta, mu0, dmu): gamma = gamma0 + lam
+    dgamma, mu = mu0 + lam dmu.
+
+        u' = u - w v - u (u^2 + v^2),   v' = w u + v - v (u^2 + v^2)
+        z' = [ (w/2) J + gamma I + delta J + mu S(u, v) ] z,   S = [[u, v], [v, -u]],  J = [[0, -1], [1, 0]]
+
+    On the cycle (u, v) = (cos wt, sin wt), z = 0, T = 2 pi / w.  In the frame turning at half the oscillator's
+    speed the z-system is constant, D = gamma I + delta J + mu diag(1, -1), so the Floquet multipliers are, in
+    closed form, 1 (trivial), exp(-2T) and -exp((gamma +- sqrt(mu^2 - delta^2)) T): two negative reals for
+    mu > delta, a complex pair of modulus exp(gamma T) and angle pi - sqrt(delta^2 - mu^2) T for mu < delta."""
+    w, g0, dg, d, m0, dm = p[0], p[1], p[2], p[3], p[4], p[5]
+    g = g0 + lam * dg
+    m = m0 + lam * dm
+    u, v, z1, z2 = x[0], x[1], x[2], x[3]
+    r2 = u * u + v * v
+    rot = 0.5 * w + d
+    dz1 = (g + m * u) * z1 + (m * v - rot) * z2
+    dz2 = (m * v + rot) * z1 + (g - m * u) * z2
+    return jnp.stack([u - w * v - u * r2, w * u + v - v * r2, dz1, dz2])
+
+
+def half_turn_multipliers(p, lam):
+    """The closed-form non-trivial multipliers of ``half_turn_field`` at lam (see there), T = 2 pi / w."""
+    w, g0, dg, d, m0, dm = (float(v) for v in p)
+    T = 2 * np.pi / w
+    g, m = g0 + lam * dg, m0 + lam * dm
+    s = np.sqrt(complex(m * m - d * d))
+    return np.array([np.exp(-2 * T), -np.exp((g + s) * T), -np.exp((g - s) * T)])
+
+
+def two_hopf_pairs(x, lam, args):
+    """Two independent Hopf normal forms in 4 states: eigenvalues (lam - 1) +- 1.0 i and (lam - 2) +- 1.7 i at
+    x = 0, so Hopf points at lam = 1 (omega 1.0) and lam = 2 (omega 1.7)."""
+    def hopf(a, b, s, w):
+        r2 = a * a + b * b
+        return s * a - w * b - a * r2, w * a + s * b - b * r2
+    d1, d2 = hopf(x[0], x[1], lam - 1.0, 1.0)
+    d3, d4 = hopf(x[2], x[3], lam - 2.0, 1.7)
+    return jnp.stack([d1, d2, d3, d4])
+
+
+def saddle_family(x, lam, args):
+    """x' = lam x + y, y' = x + lam y, z' = -3 z: eigenvalues lam +- 1 and -3; at lam = 0 the real pair is +-1
+    (neutral saddle: mu_1 + mu_2 = 2 lam = 0), and there is no Hopf point."""
+    return jnp.stack([lam * x[0] + x[1], x[0] + lam * x[1], -3.0 * x[2]])

@@ -146,7 +146,9 @@ def run(args: argparse.Namespace) -> int:
         if "omega_per_tau" in d:
             extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
                      f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
-        lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}")
+        where = (f"located, test function {d['residual']:.1e}" if d["located"] else
+                 "NOT located: bracketed by the previous point, values at the next one")
+        lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
     print("\n".join(lines), flush=True)
 
     hopf = _hopf_cycles(args, params, spec, branch, out) if args.hopf_cycles and branch.special_of("HOPF") else None

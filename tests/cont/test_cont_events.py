@@ -1,0 +1,109 @@
+"""Every reported bifurcation real, every real one reported: continuous test functions of cycles, collisions on the
+real axis, neutral saddles, discontinuous test functions, and the parameter bound.  Known answers in closed form
+(cont_systems.half_turn_field)."""
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from gfbjax.cont import (CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings, Outcome,
+                         continue_cycles, continue_equilibria, locate, start_from_function)
+from cont_systems import half_turn_field, half_turn_multipliers
+
+W = 2 * np.pi  # T = 1
+
+
+def _cycle_start(lam, st):
+    return start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), 0 * t, 0 * t], 1),
+                               2 * np.pi / W, lam, st)
+
+
+def _branch(p, lam0, lam1, **kw):
+    st = CycleSettings(m=4, N=12, ds=0.05, ds_max=0.1, max_points=60, lam_min=min(lam0, lam1),
+                       lam_max=max(lam0, lam1), direction=1 if lam1 > lam0 else -1, **kw)
+    return continue_cycles(CycleProblem(half_turn_field, 4, jnp.asarray(p)), st, _cycle_start(lam0, st))
+
+
+def test_real_axis_collision_outside_the_circle_is_no_bifurcation():
+    """mu from 0.6 down to 0: the multipliers -exp((0.8 +- sqrt(mu^2 - 0.09)))  (two reals below -1) merge at
+    mu = 0.3 into a complex pair of modulus exp(0.8) = 2.23; nothing crosses the unit circle."""
+    p = [W, 0.8, 0.0, 0.3, 0.0, 1.0]  # lam = mu
+    br = _branch(p, 0.6, 0.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert br.special == [], br.special
+    assert br.lam.min() < 0.3 < br.lam.max()  # the collision was passed
+    for lam, mu in zip(br.lam, br.multipliers):
+        ref = half_turn_multipliers(p, lam)
+        nt = np.asarray(mu)[np.argsort(np.abs(np.asarray(mu) - 1.0))[1:]]  # the trivial multiplier removed
+        np.testing.assert_allclose(np.sort_complex(nt), np.sort_complex(ref), rtol=1e-6, atol=1e-9)
+
+
+def test_neutral_saddle_is_no_neimark_sacker():
+    """gamma from -0.1 to 0.1 with mu = 0.5 > delta: the real multipliers -exp(gamma +- 0.4) have product exp(2
+    gamma), which passes 1 at gamma = 0 (the NS test function vanishes there), but neither crosses the circle."""
+    p = [W, 0.0, 1.0, 0.3, 0.5, 0.0]  # lam = gamma
+    br = _branch(p, -0.1, 0.1)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert br.special == [], br.special
+
+
+def test_neimark_sacker_is_located_with_its_angle():
+    """gamma from -0.1 to 0.1 with mu = 0.1 < delta: the complex pair -exp(gamma) exp(+-i sqrt(0.08)) crosses the
+    unit circle at gamma = 0 with angle pi - sqrt(0.08)."""
+    p = [W, 0.0, 1.0, 0.3, 0.1, 0.0]
+    br = _branch(p, -0.1, 0.1)
+    ns = br.special_of("NS")
+    assert len(ns) == 1 and ns[0].located, br.special
+    assert abs(ns[0].lam) < 1e-8 and abs(ns[0].residual) < 1e-8
+    assert abs(ns[0].angle - (np.pi - np.sqrt(0.08))) < 1e-7
+    assert [s.type for s in br.special] == ["NS"]
+    assert br.stable[0] and not br.stable[-1]
+
+
+def test_period_doubling_while_a_torus_pair_is_already_outside():
+    """A PD while another multiplier is already unstable is still reported: mu = 0.5, gamma from 0.3 to 0.5 moves
+    -exp(gamma - 0.4) through -1 at gamma = 0.4 while -exp(gamma + 0.4) stays below -1."""
+    p = [W, 0.0, 1.0, 0.3, 0.5, 0.0]
+    br = _branch(p, 0.3, 0.5)
+    pd = br.special_of("PD")
+    assert len(pd) == 1 and pd[0].located, br.special
+    assert abs(pd[0].lam - 0.4) < 1e-8
+    assert not br.stable[0]  # the other multiplier was already outside
+
+
+def test_last_point_is_on_the_bound():
+    """x' = p - x, lam_max = 1, ds = 0.3: no point and no event beyond the bound, the last point exactly on it."""
+    prob = EquilibriumProblem(lambda x, lam, a: lam - x, 1)
+    br = continue_equilibria(prob, EquilibriumSettings(ds=0.3, ds_max=0.3, lam_max=1.0), [0.0], 0.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert br.lam[-1] == pytest.approx(1.0, abs=1e-12) and np.all(br.lam <= 1.0 + 1e-12)
+    np.testing.assert_allclose(br.states["x"][:, 0], br.lam, atol=1e-12)
+
+
+def test_a_jump_is_bracketed_not_located():
+    """A test function that changes sign by a jump (as the critical eigenvalue of a coarse model can) is reported
+    as bracketed, with its value at the returned point, never as located."""
+    s, _, val, located = locate(lambda s: (-0.5 if s < 0.3 else 0.7, None), 1.0, -0.5, 0.7, tol=1e-10)
+    assert not located and abs(val) >= 0.5 and abs(s - 0.3) < 1e-8
+    s, _, val, located = locate(lambda s: (s - 0.3, None), 1.0, -0.3, 0.7, tol=1e-10)
+    assert located and abs(s - 0.3) < 1e-10
+
+
+def test_every_hopf_point_is_reported():
+    """Two Hopf pairs, (lam - 1) +- i and (lam - 2) +- 1.7 i: both crossings, the second while the first pair is
+    already unstable, each located with its frequency."""
+    from cont_systems import two_hopf_pairs
+    br = continue_equilibria(EquilibriumProblem(two_hopf_pairs, 4), EquilibriumSettings(ds=0.1, ds_max=0.2,
+                             lam_max=3.0), np.zeros(4), 0.0)
+    hs = br.special_of("HOPF")
+    assert [round(h.lam, 9) for h in hs] == [1.0, 2.0], br.special
+    assert all(h.located for h in hs)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-9)
+
+
+def test_neutral_saddle_is_no_hopf():
+    """Eigenvalues lam +- 1 (and -1): at lam = 0 a real pair sums to zero, the Hopf test function vanishes, but
+    there is no Hopf bifurcation."""
+    from cont_systems import saddle_family
+    br = continue_equilibria(EquilibriumProblem(saddle_family, 3), EquilibriumSettings(ds=0.1, lam_min=-0.5,
+                             lam_max=0.5), np.zeros(3), -0.5)
+    assert br.outcome is Outcome.REACHED_END and br.special_of("HOPF") == [], br.special
