@@ -33,6 +33,8 @@ JSON sidecar, one object:
   ``angle`` (NS: arg mu in radians), ``omega`` (HOPF), ``state`` (i of the ``special<i>_*`` arrays),
   ``normal_form``);
 - ``m`` (collocation degree, null for equilibria) and ``keys`` (the npz keys);
+- ``accuracy_tol``: the largest accepted distance of the trivial multiplier from +1 (cycles; null otherwise);
+  points above it are flagged (:attr:`Branch.flagged`);
 - ``meta``: a JSON object the caller attached (:attr:`Branch.meta`).  The engine writes none of it; the bearing
   analyses (:mod:`gfbjax.analyses.cycles`) record there the system (SI spec with its conventions, dimensionless
   groups), the grid, the state layout and the rpm conversion.
@@ -130,15 +132,27 @@ class Branch:
     component_names: list[str] | None = None
     units: dict[str, str] = field(default_factory=dict)
     meta: dict[str, Any] = field(default_factory=dict)
+    accuracy_tol: float | None = None
 
     def __len__(self) -> int:
         return len(self.lam)
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """(P,) bool: points whose trivial multiplier is farther than ``accuracy_tol`` from +1.  Their multipliers
+        are not accurate to that level, so their stability labels cannot be trusted (refine the mesh).  All False
+        for equilibria and for branches without a tolerance."""
+        if self.accuracy_tol is None:
+            return np.zeros(len(self), bool)
+        err = np.asarray(self.trivial_error, float)
+        return np.isfinite(err) & (err > self.accuracy_tol)
 
     @classmethod
     def from_points(cls, kind: str, components: list[int], points: list[PointRecord],
                     special: list[SpecialPoint], special_states: list[dict[str, np.ndarray]],
                     outcome: Outcome, message: str = "", m: int | None = None,
-                    shared_state: dict[str, np.ndarray] | None = None) -> "Branch":
+                    shared_state: dict[str, np.ndarray] | None = None,
+                    accuracy_tol: float | None = None) -> "Branch":
         def stack(name, dtype=float, shape=(0,)):
             vals = [getattr(p, name) for p in points]
             return np.array(vals, dtype=dtype) if vals else np.zeros(shape, dtype)
@@ -154,7 +168,8 @@ class Branch:
                    stack("xmax", shape=(0, k)), stack("xmin", shape=(0, k)),
                    stack("multipliers", complex, (0, nmu)), stack("stable", bool),
                    stack("trivial_error"), stack("newton_iterations", int), stack("ds"),
-                   stack("tangent_lam"), list(special), Outcome(outcome), message, states, list(special_states), m)
+                   stack("tangent_lam"), list(special), Outcome(outcome), message, states, list(special_states), m,
+                   accuracy_tol=accuracy_tol)
 
     def special_of(self, kind: str) -> list[SpecialPoint]:
         return [s for s in self.special if s.type == kind]
@@ -176,7 +191,8 @@ class Branch:
                 "components": [int(c) for c in self.components],
                 "component_names": None if self.component_names is None else list(self.component_names),
                 "units": dict(self.units), "outcome": str(self.outcome), "message": self.message, "m": self.m,
-                "special": [s.to_json() for s in self.special], "keys": sorted(arrays), "meta": self.meta}
+                "special": [s.to_json() for s in self.special], "keys": sorted(arrays), "meta": self.meta,
+                "accuracy_tol": self.accuracy_tol}
         try:  # serialise before writing: a meta that is not JSON-able leaves no half-written pair behind
             text = json.dumps(head, indent=1, default=_json_default)
         except (TypeError, ValueError) as exc:
@@ -224,9 +240,11 @@ class Branch:
         (``multipliers`` split into ``multipliers_real`` and ``multipliers_imag``, because netCDF has no
         complex type), each with ``attrs["units"]`` from :attr:`units`; the special points as ``special_type``,
         ``special_lam``, ``special_index``, ``special_located``, ``special_residual``, ``special_period``,
-        ``special_angle``, ``special_omega`` (NaN where not defined) and, when every spectrum has n values,
+        ``special_angle``, ``special_omega`` (NaN where not defined), ``flagged`` (see :attr:`flagged`) and,
+        when every spectrum has n values,
         ``special_spectrum_real``/``_imag`` (special, multiplier).  Attributes: ``format``, ``version``,
-        ``kind``, ``outcome``, ``message``, ``m`` (when set), ``components``, ``units`` (JSON) and every key of
+        ``kind``, ``outcome``, ``message``, ``m`` and ``accuracy_tol`` (when set), ``components``, ``units`` (JSON)
+        and every key of
         :attr:`meta` as ``meta_<key>``: strings and numbers as they are, anything else (dicts, lists, booleans,
         None) as a JSON string.  The full states (``states``) are not included; they stay in the npz.
         """
@@ -253,6 +271,8 @@ class Branch:
             "newton_iterations": var(("point",), np.asarray(self.newton_iterations, np.int32), "newton_iterations"),
             "ds": var(("point",), self.ds, "ds"),
             "tangent_lam": var(("point",), self.tangent_lam, "tangent_lam"),
+            "flagged": (("point",), np.asarray(self.flagged, bool),
+                        {"long_name": "trivial multiplier farther than accuracy_tol from +1"}),
         }
         lam_attrs = {"long_name": "continuation parameter"}
         if "lam" in self.units:
@@ -290,6 +310,8 @@ class Branch:
                                  "units": json.dumps(self.units)}
         if self.m is not None:
             attrs["m"] = int(self.m)
+        if self.accuracy_tol is not None:
+            attrs["accuracy_tol"] = float(self.accuracy_tol)
         for key, v in self.meta.items():
             attrs[f"meta_{key}"] = _attr(v)
         return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -433,6 +455,13 @@ def _legacy_special(d: dict[str, Any]) -> dict[str, Any]:
     return d
 
 
+def _accuracy_tol(head: dict[str, Any], js: Path) -> float | None:
+    tol = head.get("accuracy_tol")
+    if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0):
+        raise BranchFileError(f"{js}: 'accuracy_tol' must be a positive number or null, got {tol!r}")
+    return None if tol is None else float(tol)
+
+
 def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray], npz: Path, js: Path) -> Branch:
     version = head["version"]
     kind = _get(head, "kind", str, js, f"one of {KINDS}")
@@ -521,4 +550,5 @@ def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray],
                                   f"{len(sp_states)} special states")
     return cls(kind, list(components), *(arrays[k] for k in ARRAY_KEYS), special=special, outcome=outcome,
                message=message, states=states, special_states=sp_states, m=m,
-               component_names=None if names is None else list(names), units=dict(units), meta=meta)
+               component_names=None if names is None else list(names), units=dict(units), meta=meta,
+               accuracy_tol=_accuracy_tol(head, js))

@@ -203,7 +203,7 @@ class CycleCurve(Curve):
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         shared = {"mesh": self._mesh} if settings.save_states else None
         return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,
-                                  m=self.scheme.m, shared_state=shared)
+                                  m=self.scheme.m, shared_state=shared, accuracy_tol=settings.trivial_tol)
 
 
 def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: CycleStart, *,

@@ -121,6 +121,8 @@ class CycleSettings(_StepSettings):
     ``floquet``: a Floquet method (None: PeriodicQR with the dense solver, Arnoldi(k=12) with the sparse one).
     ``linear_solver``: DenseCondensation(), SparseSweep(...) or None (sparse when the problem has a Jacobian
     pattern and n >= 80).  ``save_states``: keep every point's full orbit in the branch (restarts, energies).
+    ``trivial_tol`` in (0, 1): a point whose trivial multiplier lies farther than this from +1 is flagged
+    (``Branch.flagged``): its multipliers, so its stability label, are not accurate to that level.
     """
 
     m: int = 4
@@ -135,6 +137,7 @@ class CycleSettings(_StepSettings):
     floquet: FloquetMethod | None = None
     linear_solver: LinearSolver | None = None
     save_states: bool = False
+    trivial_tol: float = 1e-5
 
     def __post_init__(self) -> None:
         check_range("m", self.m, 2, 7, integer=True)
@@ -147,6 +150,7 @@ class CycleSettings(_StepSettings):
         if self.floquet is not None and not isinstance(self.floquet, FloquetMethod):
             raise ValueError(f"floquet must be PeriodicQR(), TransferProduct(), Arnoldi(k) or None, "
                              f"got {self.floquet!r}")
+        check_range("trivial_tol", self.trivial_tol, 0.0, 1.0, lo_open=True, hi_open=True)
         if self.linear_solver is not None and not isinstance(self.linear_solver, LinearSolver):
             raise ValueError(f"linear_solver must be DenseCondensation(), SparseSweep(...) or None (automatic), "
                              f"got {self.linear_solver!r}")

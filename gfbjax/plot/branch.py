@@ -89,6 +89,11 @@ def plot_bifurcation(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), colu
             for xs, ys in _segments(lam, v, ~stable):
                 ax.plot(xs, ys, "--", color=colour, lw=1.2, label=f"{ext} (unstable)" if first else None)
                 first = False
+        flagged = np.asarray(branch.flagged, bool)
+        if flagged.any():  # stability labels that the trivial multiplier's error does not support
+            k_arr = np.asarray(branch.xmax, float)[:, k]
+            ax.plot(lam[flagged], k_arr[flagged], "x", color="0.4", ms=6, zorder=4,
+                    label="inaccurate (trivial multiplier)")
         seen = set()
         for s, row in rows:
             if row is None:

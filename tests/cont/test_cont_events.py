@@ -107,3 +107,30 @@ def test_neutral_saddle_is_no_hopf():
     br = continue_equilibria(EquilibriumProblem(saddle_family, 3), EquilibriumSettings(ds=0.1, lam_min=-0.5,
                              lam_max=0.5), np.zeros(3), -0.5)
     assert br.outcome is Outcome.REACHED_END and br.special_of("HOPF") == [], br.special
+
+
+def test_inaccurate_points_are_flagged():
+    """Van der Pol at mu = 3 (a relaxation oscillation): on a coarse mesh the trivial multiplier is far from +1,
+    and such points are flagged (their stability labels cannot be trusted); on a fine mesh they are not."""
+    from scipy.integrate import solve_ivp
+    from gfbjax.cont import Branch, start_from_samples
+    from cont_systems import van_der_pol
+
+    mu = 3.0
+    rhs = lambda t, y: [y[1], mu * (1 - y[0] ** 2) * y[1] - y[0]]  # noqa: E731
+    ev = lambda t, y: y[1]  # noqa: E731
+    ev.direction = -1
+    s = solve_ivp(rhs, (0, 60), [2.0, 0.0], rtol=1e-10, atol=1e-10, events=ev, dense_output=True)
+    te = s.t_events[0]
+    t = np.linspace(te[-2], te[-1], 400)
+    out = {}
+    for N, m in ((6, 2), (60, 5)):
+        st = CycleSettings(m=m, N=N, ds=0.05, max_points=2, trivial_tol=1e-5)
+        out[N] = continue_cycles(CycleProblem(van_der_pol, 2, jnp.asarray(mu)), st,
+                                 start_from_samples(t, s.sol(t).T, te[-1] - te[-2], 0.0, st))
+    assert np.all(out[6].trivial_error > 1e-2) and np.all(out[6].flagged)
+    assert np.all(out[60].trivial_error < 1e-6) and not np.any(out[60].flagged)
+    back = Branch.from_points("cycles", [0], [], [], [], Outcome.MAX_POINTS, accuracy_tol=1e-5)
+    assert back.flagged.shape == (0,)
+    with pytest.raises(ValueError, match="trivial_tol"):
+        CycleSettings(trivial_tol=0.0)

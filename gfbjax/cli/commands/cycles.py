@@ -216,8 +216,11 @@ def run(args: argparse.Namespace) -> int:
         + (f" ({t_cont / max(len(branch), 1):.2f} s per point)" if len(branch) else ""),
         format_table(rows),
     ]
+    n_flagged = int(np.sum(branch.flagged))
     if len(branch):
-        lines.insert(1, f"  max trivial error {float(np.nanmax(branch.trivial_error)):.2e} (|mu_trivial - 1|)")
+        lines.insert(1, f"  max trivial error {float(np.nanmax(branch.trivial_error)):.2e} (|mu_trivial - 1|)"
+                        + (f"; {n_flagged} points above trivial_tol = {settings.trivial_tol:g}: their stability "
+                           "labels are unreliable (refine --N)" if n_flagged else ""))
     print("\n".join(lines), flush=True)
 
     figures: list[str] = []
@@ -248,6 +251,8 @@ def run(args: argparse.Namespace) -> int:
         "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "unstable": len(branch) - n_stable,
                    "special": len(rows), **{k: sum(1 for d in rows if d["type"] == k) for k in ("LPC", "PD", "NS")}},
+        "accuracy": {"trivial_tol": settings.trivial_tol, "flagged_points": n_flagged,
+                     "max_trivial_error": float(np.nanmax(branch.trivial_error)) if len(branch) else None},
         "lam_first": float(branch.lam[0]) if len(branch) else None,
         "lam_last": float(branch.lam[-1]) if len(branch) else None,
         "components": {"names": ["x_j", "y_j", "x_d", "y_d"][:len(comps)], "state_indices": comps},
