@@ -88,6 +88,12 @@ class Curve(abc.ABC):
         of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
         False: X is the first point past the event, not the event itself."""
 
+    def null_tangent(self, X: Any) -> Any:
+        """A unit vector spanning the null space of the Jacobian at X (with respect to the unknowns and lam), to
+        start where fixing lam is singular (a fold), oriented so that its largest component is positive; None
+        when the curve cannot compute it (then such a start fails with START_FAILED)."""
+        return None
+
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         return Branch.from_points(self.kind, self.components, points, special, special_states, outcome, message)
 
@@ -168,7 +174,10 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     """Continue ``curve`` from ``X0``.
 
     ``tau0=None``: ``X0`` is a guess, corrected at fixed lam and recorded; the first tangent points towards
-    increasing lam times ``settings.direction``.  Otherwise ``X0`` is a bifurcation point (Hopf, PD) and ``tau0``
+    increasing lam times ``settings.direction``.  Where fixing lam is singular (X0 at a fold) the guess is
+    corrected along the null tangent of the Jacobian instead (curves that provide :meth:`Curve.null_tangent`),
+    and ``direction`` chooses between the two halves of the branch (+1: along the null tangent oriented with its
+    largest component positive).  Otherwise ``X0`` is a bifurcation point (Hopf, PD) and ``tau0``
     the direction of the emanating branch (``X0`` itself is not recorded).  ``callback(index, record)`` is called
     after each accepted point (return ``False`` to stop).
     """
@@ -192,9 +201,17 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
     algo = s.algorithm
     if tau0 is None:
         sol, lin = c.correct(X0, c.natural_constraint(X0, c.lam(X0)))
-        if not sol.converged:
-            return Outcome.START_FAILED, f"start point did not converge ({sol.outcome})"
-        X, tau = sol.x, c.scale(sol.aux, float(s.direction))
+        if sol.converged:
+            X, tau = sol.x, c.scale(sol.aux, float(s.direction))
+        else:  # at a fold (or on a branch vertical in lam) fixing lam is singular: start along the null tangent
+            v = c.null_tangent(X0)
+            if v is None:
+                return Outcome.START_FAILED, f"start point did not converge ({sol.outcome})"
+            sol, lin = c.correct(X0, c.palc_constraint(X0, v, 0.0, X0))
+            if not sol.converged:
+                return Outcome.START_FAILED, f"start point did not converge, not even along its null tangent " \
+                                             f"({sol.outcome})"
+            X, tau = sol.x, c.scale(sol.aux, float(s.direction))
         an = c.analyse(X, lin)
         tests = c.tests(an, run.tangent_lam(tau))
         if not run.add_point(c.record(X, an, int(sol.iterations), 0.0, run.tangent_lam(tau))):

@@ -75,6 +75,11 @@ def _correct(f, args, y0, con, newton: NewtonSettings):
 
 
 @partial(jax.jit, static_argnums=(0,))
+def _augmented_jacobian(f, args, y):
+    return jax.jacfwd(lambda yy: f(yy[:-1], yy[-1], args))(y)
+
+
+@partial(jax.jit, static_argnums=(0,))
 def _jacobian(f, args, y):
     return jax.jacfwd(lambda x: f(x, y[-1], args))(y[:-1])
 
@@ -125,6 +130,11 @@ class EquilibriumCurve(Curve):
         sol = _correct(self.problem.f, self.problem.args, jnp.asarray(pred, float), con, self.settings.newton)
         sol = type(sol)(np.asarray(sol.x), np.asarray(sol.aux), sol.code, sol.iterations, sol.residual, sol.step)
         return sol, None
+
+    def null_tangent(self, y):
+        J = np.asarray(_augmented_jacobian(self.problem.f, self.problem.args, jnp.asarray(y, float)))
+        v = np.linalg.svd(J)[2][-1]  # right singular vector of the smallest singular value of [f_x f_lam]
+        return v * np.sign(v[np.argmax(np.abs(v))])
 
     def analyse(self, y, lin):
         ev, _ = _eig(self.problem, y)

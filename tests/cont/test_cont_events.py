@@ -134,3 +134,17 @@ def test_inaccurate_points_are_flagged():
     assert back.flagged.shape == (0,)
     with pytest.raises(ValueError, match="trivial_tol"):
         CycleSettings(trivial_tol=0.0)
+
+
+def test_start_exactly_at_a_fold_gives_both_halves():
+    """x' = p - x^2 from its fold (0, 0): fixing p is singular there; the start goes along the null tangent and
+    the two directions give the two halves x = +sqrt(p) (stable) and x = -sqrt(p) (unstable)."""
+    prob = EquilibriumProblem(lambda x, lam, a: lam - x * x, 1)
+    halves = {}
+    for d in (1, -1):
+        br = continue_equilibria(prob, EquilibriumSettings(ds=0.1, lam_max=1.0, direction=d), [0.0], 0.0)
+        assert br.outcome is Outcome.REACHED_END, br.message
+        x = br.states["x"][:, 0]
+        np.testing.assert_allclose(x ** 2, br.lam, atol=1e-10)
+        halves[d] = x
+    assert np.all(halves[1][1:] > 0) and np.all(halves[-1][1:] < 0)
