@@ -22,6 +22,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 from . import limits  # noqa: E402
+from .limits import NoSolutionError  # noqa: E402
 from .params import (  # noqa: E402
     VARIATIONS,
     ParameterError,
@@ -38,6 +39,7 @@ from .params import (  # noqa: E402
 
 __all__ = [
     "limits",
+    "NoSolutionError",
     "VARIATIONS",
     "ParameterError",
     "Params",

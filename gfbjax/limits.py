@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "NoSolutionError",
     "ParameterError",
     "Range",
     "is_traced",
@@ -46,6 +47,12 @@ __all__ = [
 
 class ParameterError(ValueError):
     """Raised for an input outside its allowed range; the message names the field, its value and the range."""
+
+
+class NoSolutionError(RuntimeError):
+    """A solve that the user asked for found no solution (no static equilibrium at a start speed, no cycle at a
+    design); the message says where and why.  Raised instead of returning garbage; the command line reports it in
+    one line with exit status 1."""
 
 
 def is_traced(value: Any) -> bool:

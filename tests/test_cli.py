@@ -155,3 +155,21 @@ def test_python_dash_m_help():
                        timeout=120)
     assert r.returncode == 0, r.stderr
     assert "--speed" in r.stdout
+
+
+def test_sigterm_is_handled_like_sigint():
+    """While a command runs, SIGTERM raises KeyboardInterrupt (a continuation then ends with outcome
+    'interrupted' and writes its points, and the command exits 130); the previous handler comes back after."""
+    import os
+    import signal
+
+    from gfbjax.cli import _terminate_as_interrupt
+
+    before = signal.getsignal(signal.SIGTERM)
+    previous = _terminate_as_interrupt()
+    try:
+        with pytest.raises(KeyboardInterrupt):  # the handler runs as soon as os.kill returns
+            os.kill(os.getpid(), signal.SIGTERM)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert signal.getsignal(signal.SIGTERM) == before

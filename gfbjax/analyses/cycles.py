@@ -29,6 +29,7 @@ from ..model import core_rates, layout, vector_field
 from ..model.pattern import jacobian_sparsity
 from .. import limits
 from ..params import ParameterError, Params, SystemSpec
+from ..limits import NoSolutionError
 from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
@@ -88,7 +89,7 @@ def linear_response_start(params: Params, omega: float, equilibrium: StaticResul
     """
     eq = equilibrium if equilibrium is not None else solve_equilibrium(params, omega)
     if not eq.converged:
-        raise RuntimeError(f"no static equilibrium at Omega_bar = {omega}: {eq.message}")
+        raise NoSolutionError(f"no static equilibrium at Omega_bar = {omega}: {eq.message}")
     x_eq = jnp.asarray(eq.state)
     om = jnp.asarray(float(omega))
     J = np.asarray(jax.jacfwd(core_rates)(x_eq, om, jnp.zeros(2), params))
@@ -204,7 +205,7 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
     meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:
-        raise RuntimeError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")
+        raise NoSolutionError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")
     settings = settings or cont.EquilibriumSettings()
     import dataclasses
 

@@ -25,6 +25,7 @@ import numpy as np
 from jax import Array
 
 from .. import cont
+from ..cont import Outcome
 from ..model import balanced_vector_field, film, layout
 from .. import limits
 from ..params import Params, SystemSpec
@@ -99,8 +100,8 @@ class StaticResult:
     Attributes:
         omega: speed Omega_bar.
         w: extra specific load ``W/(p0 L D)`` per bearing.
-        outcome: ``"converged"``, ``"contact"`` (no equilibrium with an open film: the journal would touch the foil
-            before carrying the load) or ``"no_convergence"``.
+        outcome: :class:`gfbjax.cont.Outcome` (a str enum): ``CONVERGED``, ``CONTACT`` (no equilibrium with an
+            open film: the journal would touch the foil before carrying the load) or ``NO_SOLUTION``.
         message: a sentence on the outcome.
         load_fraction: fraction of the (gravity + extra) load carried by the last converged state (1 if converged).
         state: core state vector of the last converged equilibrium.
@@ -138,7 +139,7 @@ class StaticResult:
 
     @property
     def converged(self) -> bool:
-        return self.outcome == "converged"
+        return self.outcome is Outcome.CONVERGED
 
     @property
     def critical_eigenvalue(self) -> complex:
@@ -271,7 +272,7 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
                                    xtol, min_step, first_step=1.0)
         iters += it
         if t >= 1.0:
-            return _build_result(s, omega, w, params, "converged", "converged from the given guess", 1.0,
+            return _build_result(s, omega, w, params, Outcome.CONVERGED, "converged from the given guess", 1.0,
                                  res_norm, iters)
     from ..model import initial_state
 
@@ -280,16 +281,16 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
                                   first_step=0.25)
     iters += it
     if frac >= 1.0:
-        return _build_result(s, omega, w, params, "converged", "converged by load ramp", 1.0, res_norm, iters)
+        return _build_result(s, omega, w, params, Outcome.CONVERGED, "converged by load ramp", 1.0, res_norm, iters)
     p_last = with_load(params, w, frac)
     h_last = float(_h_min(s, p_last))
     if h_last < contact_h:
         msg = (f"the film closes: h_min = {h_last:.3g} c at {100 * frac:.2f}% of the load; the bearing cannot "
                "carry the full load at this speed")
-        outcome = "contact"
+        outcome = Outcome.CONTACT
     else:
         msg = f"Newton failed beyond {100 * frac:.2f}% of the load (h_min = {h_last:.3g} c)"
-        outcome = "no_convergence"
+        outcome = Outcome.NO_SOLUTION
     return _build_result(s, omega, w, p_last, outcome, msg, frac, res_norm, iters)
 
 

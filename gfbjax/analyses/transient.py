@@ -25,7 +25,7 @@ machine made these small LUs 50-100x slower, hence ``OPENBLAS_NUM_THREADS=1`` by
 Long runs are integrated in chunks of ``chunk_revs`` revolutions: one compiled ``diffeqsolve`` per
 (grid, settings), reused by every chunk, a progress bar advanced per chunk, and everything computed up to a
 failing chunk is kept.  Rub: a diffrax :class:`~diffrax.Event` stops the run when the minimum film thickness falls
-to ``h_rub``; the result then has ``outcome == "rub"`` and all data up to the contact (never NaN).
+to ``h_rub``; the result then has ``outcome == Outcome.RUB`` and all data up to the contact (never NaN).
 
 Public API: :class:`TransientSettings`, :class:`TransientResult`, :func:`simulate` (constant speed),
 :func:`run_up` (run-up or coast-down), :func:`runup_acceleration`, :func:`default_initial_state`.
@@ -36,6 +36,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
+import zipfile
 import math
 import sys
 import time
@@ -52,7 +53,7 @@ import lineax as lx
 import optimistix as optx
 from jax import Array
 
-from ..cont import Coloring, color_pattern, dense_jacobian
+from ..cont import Coloring, Outcome, color_pattern, dense_jacobian
 from ..model import film, layout, runup_vector_field
 from .. import limits
 from ..params import ParameterError, Params
@@ -77,7 +78,7 @@ SOLVERS: dict[str, Callable[[], dfx.AbstractSolver]] = {
     "kvaerno5": dfx.Kvaerno5,
 }
 
-OUTCOMES = ("completed", "rub", "failed")
+OUTCOMES = (Outcome.COMPLETED, Outcome.RUB, Outcome.INTEGRATION_FAILED)
 
 
 # Ranges of the TransientSettings fields (only this class uses them; the shared ranges are in gfbjax.limits).
@@ -147,8 +148,9 @@ class TransientResult:
             rigid ``[x_j, y_j, x_j', y_j']`` (over c, primes d/dtau; y up).
         h_min: minimum film thickness over c at each sample, (M,).
         final_state: full state at the last sample (a run can be continued from it).
-        outcome: ``"completed"``, ``"rub"`` (film reached ``h_rub``; the last sample is the contact) or
-            ``"failed"`` (solver failure; the samples up to the failing chunk are kept).
+        outcome: :class:`gfbjax.cont.Outcome`: ``COMPLETED``, ``RUB`` (film reached ``h_rub``; the last sample is
+            the contact), ``INTEGRATION_FAILED`` (solver failure; the samples up to the failing chunk are kept) or
+            ``INTERRUPTED`` (the samples up to the last finished chunk are kept).
         message: one sentence on the outcome.
         omega0, accel: start speed and angular acceleration (0 at constant speed).
         samples_per_rev: samples per revolution (at the top speed of a run-up).
@@ -211,7 +213,7 @@ class TransientResult:
 
     @property
     def completed(self) -> bool:
-        return self.outcome == "completed"
+        return self.outcome is Outcome.COMPLETED
 
     def poincare(self, last: int | None = None) -> np.ndarray:
         """Once-per-revolution samples (unbalance phase = 0 mod 2 pi) of a constant-speed run: indices
@@ -254,12 +256,21 @@ class TransientResult:
 
     @classmethod
     def load(cls, path: str | Path) -> "TransientResult":
-        """Read a result written by :meth:`save`."""
-        with np.load(Path(path), allow_pickle=False) as z:
-            meta = json.loads(str(z["meta"]))
-            states = z["states"] if "states" in z.files else None
-            return cls(tau=z["tau"], speed=z["speed"], rotor=z["rotor"], h_min=z["h_min"],
-                       final_state=z["final_state"], states=states, **meta)
+        """Read a result written by :meth:`save`; ValueError (one line, naming the file) for a missing, corrupt or
+        foreign file."""
+        try:
+            with np.load(Path(path), allow_pickle=False) as z:
+                meta = json.loads(str(z["meta"]))
+                meta["outcome"] = Outcome(_LEGACY_OUTCOMES.get(meta["outcome"], meta["outcome"]))
+                states = z["states"] if "states" in z.files else None
+                return cls(tau=z["tau"], speed=z["speed"], rotor=z["rotor"], h_min=z["h_min"],
+                           final_state=z["final_state"], states=states, **meta)
+        except (OSError, EOFError, KeyError, TypeError, ValueError, zipfile.BadZipFile) as exc:
+            first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ValueError(f"{path}: not a readable gfbjax transient result ({first})") from None
+
+
+_LEGACY_OUTCOMES = {"failed": "integration_failed"}  # the name before the shared Outcome vocabulary
 
 
 def _json_default(o: Any) -> Any:
@@ -441,13 +452,13 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
     states = [y0[None]] if settings.save_states else None
     y, dt0 = jnp.asarray(y0), dtau / 8.0  # first step; later chunks start with the previous mean step
     steps = accepted = rejected = 0
-    outcome, message = "completed", ""
+    outcome, message = Outcome.COMPLETED, ""
     chunk_times: list[float] = []
     t_wall = time.perf_counter()
     t_cpu = time.process_time()
     omega0_a, accel_a, hrub_a = (jnp.asarray(v, dtype=jnp.float64) for v in (omega0, accel, settings.h_rub))
     if float(h0) <= settings.h_rub:
-        outcome = "rub"
+        outcome = Outcome.RUB
         message = f"the initial state already touches: h_min = {float(h0):.4g} c <= h_rub = {settings.h_rub:g} c"
         n_chunks = 0
     bar = tqdm(total=n_chunks, desc=desc, unit="chunk", disable=not progress, file=sys.stderr, dynamic_ncols=True)
@@ -492,7 +503,7 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
                         if states is not None:
                             states.append(y_end[None])
                     y = jnp.asarray(y_end)
-                outcome = "rub"
+                outcome = Outcome.RUB
                 message = (f"rub: the film thickness reached h_min = {settings.h_rub:g} c at tau = {t_end:.6g}, "
                            f"Omega_bar = {omega0 + accel * t_end:.5g}")
                 bar.update(1)
@@ -502,11 +513,11 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
                 t_last = float(np.concatenate(taus)[-1])
                 reason = _result_name(result)
                 if last_h < 5 * max(settings.h_rub, 0.01):
-                    outcome = "rub"
+                    outcome = Outcome.RUB
                     message = (f"rub: the solver stalled ({reason}) with the film nearly closed, h_min = {last_h:.3g} c "
                                f"at tau = {t_last:.6g}, Omega_bar = {omega0 + accel * t_last:.5g}")
                 else:
-                    outcome = "failed"
+                    outcome = Outcome.INTEGRATION_FAILED
                     message = (f"solver failure ({reason}) in chunk {c + 1}/{n_chunks}; samples kept up to "
                                f"tau = {t_last:.6g} (Omega_bar = {omega0 + accel * t_last:.5g})")
                 if k == n_valid and np.all(np.isfinite(y_end)):
@@ -526,7 +537,7 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
                 if callback is not None:
                     callback(info)
     except KeyboardInterrupt:
-        outcome, message = "failed", "interrupted by the user; samples kept up to the last finished chunk"
+        outcome, message = Outcome.INTERRUPTED, "interrupted by the user; samples kept up to the last finished chunk"
     finally:
         bar.close()
     wall = time.perf_counter() - t_wall
@@ -535,7 +546,7 @@ def _integrate(params: Params, y0: np.ndarray, omega0: float, accel: float, tau_
     rotor = np.concatenate(rotors)
     hmin = np.concatenate(hmins)
     speed = omega0 + accel * tau
-    if outcome == "completed":
+    if outcome is Outcome.COMPLETED:
         message = f"completed {tau[-1]:.6g} tau ({_revs(omega0, accel, tau[-1]):.1f} revolutions)"
     if note:
         message = f"{message}; {note}"

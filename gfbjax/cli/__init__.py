@@ -3,8 +3,9 @@
 Subcommands live in :mod:`gfbjax.cli.commands`, one module each with ``register(subparsers)``; they are discovered
 automatically.  Code elsewhere can add one with :func:`register_command` before calling :func:`main`.
 
-Exit status: what the command returns (0 success); 2 for invalid input (a one-line message naming the option or
-field, no traceback); 130 when interrupted.
+Exit status: what the command returns (0 success, 1 when the computation ended early, e.g. a branch before
+``--end``); 2 for invalid input (a one-line message naming the option or field, no traceback); 130 when
+interrupted by SIGINT or SIGTERM (a continuation then writes the points it has).
 
 Process settings: :func:`main` is a program's entry point, so it sets what a program may: the XLA:CPU and OpenBLAS
 settings of :func:`gfbjax._process.configure_process` (where not set by the user) and matplotlib's non-interactive
@@ -15,6 +16,7 @@ the plotting modules) leaves the matplotlib backend alone.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from typing import Any, Callable, Sequence
 
@@ -93,6 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0 if not argv else 2
     prog = f"{PROG} {args.command}"
     _configure_program()
+    previous = _terminate_as_interrupt()
     try:
         return int(func(args) or 0)
     except ParameterError as exc:
@@ -101,6 +104,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def _terminate_as_interrupt() -> Any:
+    """Treat SIGTERM like SIGINT while a command runs (a batch system's kill then ends a continuation with outcome
+    ``interrupted`` and writes what was computed); returns the previous handler (None off the main thread)."""
+    try:
+        return signal.signal(signal.SIGTERM, _raise_interrupt)
+    except ValueError:  # not the main thread (e.g. main() called from a worker): leave signals alone
+        return None
 
 
 if __name__ == "__main__":  # pragma: no cover

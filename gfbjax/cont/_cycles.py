@@ -21,9 +21,9 @@ from ._branch import Branch, PointRecord
 from ._driver import Curve, continue_curve
 from ._events import classify, cycle_test_functions, detect, double_orbit_pd
 from ._floquet import FloquetMethod, nontrivial, trivial_error
-from ._linear import BoundSolver, Linearisation, choose_solver
+from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._problem import CycleProblem
-from ._settings import CycleSettings
+from ._settings import CycleSettings, Natural
 
 __all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "bind_solver", "start_from_samples", "start_from_function",
            "start_from_hopf", "start_from_branch", "start_from_pd"]
@@ -106,6 +106,46 @@ def bind_solver(problem: CycleProblem, scheme: col.Scheme, settings: CycleSettin
     return choose_solver(s.linear_solver, problem).bind(problem, scheme)
 
 
+#: Estimated working memory above which a cycle computation is refused before it starts (bytes).
+MEMORY_LIMIT = 4 * 2**30
+
+
+def _effective_floquet(problem: CycleProblem, settings: CycleSettings) -> FloquetMethod:
+    from ._floquet import Arnoldi, PeriodicQR
+    solver = choose_solver(settings.linear_solver, problem)
+    return settings.floquet or (Arnoldi() if isinstance(solver, SparseSweep) else PeriodicQR())
+
+
+def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleSettings) -> None:
+    """ValueError, before any work, when ``orbit`` does not fit ``problem`` (state count, f's output shape), when
+    the Floquet method cannot see past the trivial multipliers, or when the collocation system would not fit in
+    :data:`MEMORY_LIMIT`."""
+    n, N, m = problem.n, orbit.N, int(orbit.xi.shape[1]) + 1
+    if orbit.n != n:
+        raise ValueError(f"the start orbit has {orbit.n} states but problem.n = {n}")
+    out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((n,), orbit.xm.dtype), orbit.lam, problem.args)
+    if getattr(out, "shape", None) != (n,):
+        raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
+                         f"shape ({n},); it must return ({n},)")
+    floquet = _effective_floquet(problem, settings)
+    from ._floquet import Arnoldi
+    if isinstance(floquet, Arnoldi) and min(floquet.k, n - 2) <= problem.n_trivial:
+        raise ValueError(f"Arnoldi(k={floquet.k}) computes min(k, n - 2) = {min(floquet.k, n - 2)} multipliers for "
+                         f"n = {n}, not more than the {problem.n_trivial} trivial one(s): stability could not be "
+                         "judged; use a larger k, or floquet=PeriodicQR() with the dense solver")
+    solver = choose_solver(settings.linear_solver, problem)
+    if isinstance(solver, SparseSweep):
+        nnz = int(np.count_nonzero(np.asarray(problem.jac_sparsity, bool) | np.eye(n, dtype=bool)))
+        need = 8 * 4 * N * m * m * nnz  # Jacobian values and interval blocks at every Gauss point
+    else:
+        need = 8 * 6 * N * (m * n) ** 2  # dense interval blocks, their complete QR and the condensed blocks
+    if need > MEMORY_LIMIT:
+        raise ValueError(f"N = {N} mesh intervals with m = {m} and n = {n} states need about {need / 2**30:.1f} "
+                         f"GiB for the collocation system (limit {MEMORY_LIMIT / 2**30:.0f} GiB); use fewer "
+                         "intervals" + ("" if isinstance(solver, SparseSweep) else
+                                        " or the sparse solver (a Jacobian pattern)"))
+
+
 def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,
                   settings: CycleSettings | None = None) -> tuple[Any, Linearisation | None]:
     """Correct one orbit with the linear solver and Newton tolerances of ``settings`` (default
@@ -113,6 +153,7 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     Returns the :class:`NewtonSolution` (``x`` the orbit, ``aux`` the unit tangent) and the linearisation at
     the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives."""
     s = settings or CycleSettings()
+    check_cycle_inputs(problem, orbit, s)
     scheme = col.Scheme(int(orbit.xi.shape[1]) + 1)
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
@@ -212,9 +253,18 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
     """Continue a branch of periodic orbits of ``problem`` from ``start`` (see :mod:`._driver`).
 
     Returns a :class:`Branch` (points so far and the :class:`Outcome`, whatever ended the continuation).
-    Raises ``ValueError`` before any work for a linear solver the problem cannot use."""
+    Raises ``ValueError`` before any work for inputs that do not fit together (:func:`check_cycle_inputs`, a
+    linear solver the problem cannot use, a natural-parameter algorithm from a bifurcation point)."""
+    if not isinstance(problem, CycleProblem):
+        raise ValueError(f"problem must be a CycleProblem, got {type(problem).__name__}")
+    if not isinstance(settings, CycleSettings):
+        raise ValueError(f"settings must be CycleSettings, got {type(settings).__name__}")
     if not isinstance(start, CycleStart):
         raise ValueError(f"start must be a CycleStart (see start_from_*), got {type(start).__name__}")
+    if start.tangent is not None and isinstance(settings.algorithm, Natural):
+        raise ValueError(f"a {start.label} start leaves its bifurcation point along a direction of its own; "
+                         "natural-parameter steps cannot follow it: use PseudoArclength()")
+    check_cycle_inputs(problem, start.orbit, settings)
     scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1)
     curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
     return continue_curve(curve, settings, start.orbit, start.tangent, callback=callback, progress=progress,

@@ -20,7 +20,9 @@ secant): the last point lies on the bound, and no point or event beyond it is re
 
 Whatever ends the branch, the points computed so far are returned in a :class:`~._branch.Branch` with its
 :class:`~._results.Outcome`.  KeyboardInterrupt (and SIGTERM, where the caller maps it to KeyboardInterrupt) ends
-it with ``INTERRUPTED``; any other exception (a bug in the vector field, a wrong shape) propagates.
+it with ``INTERRUPTED``, a numerical failure of the linear algebra (:class:`~._newton.LinearSolveError`, e.g.
+Arnoldi without convergence) with ``LINEAR_SOLVE_FAILED``; any other exception (a bug in the vector field, a
+wrong shape) propagates.
 """
 from __future__ import annotations
 
@@ -31,6 +33,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from ._branch import Branch, PointRecord
+from ._newton import LinearSolveError
 from ._results import Outcome, SpecialPoint
 
 __all__ = ["Curve", "continue_curve", "locate"]
@@ -190,6 +193,8 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
         outcome, message = _loop(run, X0, tau0)
     except KeyboardInterrupt:
         outcome, message = Outcome.INTERRUPTED, "interrupted; the points computed so far are kept"
+    except LinearSolveError as exc:  # e.g. Arnoldi without convergence: a numerical failure, not a bug
+        outcome, message = Outcome.LINEAR_SOLVE_FAILED, f"{exc} (after {len(run.points)} points)"
     finally:
         if bar is not None:
             bar.close()
@@ -298,18 +303,17 @@ def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
             return c.tests(a, tl)[kind], (sol, a, tl)
 
         sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol)
-        if payload is not None and located:
+        if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
             sol, an, tl = payload
             point, residual = sol.x, float(val)
-        else:
-            located = False
+        located = bool(located and payload is not None)
     extra = c.special(kind, point, an, located)
     if extra is None:  # the test function changed sign, but not at a bifurcation (module docstring of the curve)
         return
-    if located:
+    if np.isfinite(residual):  # a point of the localisation: inserted as a row of the branch
         run.points.append(c.record(point, an, int(sol.iterations), sv, tl))
     run.special_states.append(c.state(point))
     run.special.append(SpecialPoint(type=kind, lam=float(c.lam(point)),
-                                    index=len(run.points) - 1 if located else len(run.points),
+                                    index=len(run.points) - 1 if np.isfinite(residual) else len(run.points),
                                     spectrum=np.asarray(an["spectrum"]), located=bool(located), residual=residual,
                                     state=len(run.special_states) - 1, **extra))

@@ -178,9 +178,17 @@ def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettin
                         progress: bool = False) -> Branch:
     """Continue equilibria from the guess (x0, lam0), first corrected at fixed lam.  The returned ``Branch``
     stores the eigenvalues of f_x in ``multipliers`` (decreasing real part) and every state in ``states['x']``."""
+    if not isinstance(problem, EquilibriumProblem):
+        raise ValueError(f"problem must be an EquilibriumProblem, got {type(problem).__name__}")
+    if not isinstance(settings, EquilibriumSettings):
+        raise ValueError(f"settings must be EquilibriumSettings, got {type(settings).__name__}")
     x0 = np.asarray(x0, float)
     if x0.shape != (problem.n,):
         raise ValueError(f"x0 must have shape (n,) = ({problem.n},), got {x0.shape}")
+    out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((problem.n,), jnp.float64), float(lam0), problem.args)
+    if getattr(out, "shape", None) != (problem.n,):
+        raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
+                         f"shape ({problem.n},); it must return ({problem.n},)")
     y0 = np.append(x0, float(lam0))
     return continue_curve(EquilibriumCurve(problem, settings), settings, y0, callback=callback, progress=progress,
                           desc="equilibria")
@@ -192,6 +200,9 @@ def hopf_point(problem: EquilibriumProblem, branch: Branch, which: int = 0) -> H
     hs = branch.special_of("HOPF")
     if not hs:
         raise ValueError("branch has no HOPF special point")
+    if not hs[which].located:
+        raise ValueError(f"the HOPF point near lam = {hs[which].lam:.6g} was not located (its test function jumps "
+                         "or the localisation failed): its state is not a Hopf point; refine the model or the steps")
     st = branch.special_states[hs[which].state]
     y = np.append(st["x"], float(st["lam"]))
     ev, V = _eig(problem, y)

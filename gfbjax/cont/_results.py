@@ -32,8 +32,9 @@ class Outcome(enum.StrEnum):
     corrector failed down to the smallest step; the message gives the corrector's own outcome);
     ``START_FAILED``; ``STOPPED`` (by the callback); ``INTERRUPTED`` (SIGINT/SIGTERM: the computed part is kept).
     Physics: ``CONTACT`` (the film closed: no equilibrium or cycle with h_min > h_rub); ``RUB`` (a transient
-    touched the foil); ``COMPLETED`` (a transient ran to its end); ``UNSTABLE`` (a design schedule stopped at an
-    unstable optimum); ``NO_SOLUTION`` (no equilibrium or cycle was found).
+    touched the foil); ``COMPLETED`` (a transient ran to its end); ``INTEGRATION_FAILED`` (the time integrator
+    gave up); ``UNSTABLE`` (a design schedule stopped at an unstable optimum); ``NO_SOLUTION`` (no equilibrium or
+    cycle was found).
     """
 
     CONVERGED = "converged"
@@ -52,6 +53,7 @@ class Outcome(enum.StrEnum):
     COMPLETED = "completed"
     UNSTABLE = "unstable"
     NO_SOLUTION = "no_solution"
+    INTEGRATION_FAILED = "integration_failed"
     RUNNING = "running"  # inside a compiled loop only: the iteration goes on
 
     @property
@@ -87,7 +89,9 @@ class SpecialPoint:
     event).  period: cycle period (Hopf: 2 pi / omega; NaN for folds of equilibria).  spectrum: the Floquet
     multipliers (cycles) or eigenvalues of df/dx (equilibria) at the point, as in the branch arrays.
     located: the test function was driven to zero by the localisation solver; residual: its value at the returned
-    point (NaN when not located; then the point is only bracketed between two rows).  angle: NS, the argument of
+    point.  Not located with a finite residual: the sign change was bracketed to the step tolerance but the test
+    function jumps there (its value is the residual): the location is good, the type-specific data less so.  Not
+    located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.  angle: NS, the argument of
     the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the critical eigenvalue (per unit
     time of the problem).  state: index into ``Branch.special_states`` (the full state at the point).
     normal_form: normal-form data where computed (e.g. ``{"l1": first Lyapunov coefficient}``).

@@ -28,6 +28,7 @@ import numpy as np
 from .. import cont
 from ..cont import Orbit
 from ..analyses.cycles import gfb_cycle_problem, linear_response_start
+from ..limits import NoSolutionError
 from ..analyses.energy import CycleEnergy, orbit_energy
 from .. import limits
 from ..params import ParameterError, Params
@@ -40,7 +41,7 @@ FOIL_RANGES = {"alpha_f": limits.DESIGN_ALPHA_F, "eta": limits.DESIGN_ETA}
 FOIL_BOUNDS = {name: (rng.lo, rng.hi) for name, rng in FOIL_RANGES.items()}
 
 
-class CycleNotConverged(RuntimeError):
+class CycleNotConverged(NoSolutionError):
     """Newton found no cycle at these foil properties (counted as a solve)."""
 
 

@@ -11,6 +11,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ._common import axes_grid, colours, finish, labelled
+
 __all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_energy", "plot_schedule",
            "SPECIAL_STYLE"]
 
@@ -18,11 +20,14 @@ __all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_ener
 SPECIAL_STYLE = {"NS": ("D", "tab:purple"), "PD": ("s", "tab:orange"), "LPC": ("^", "tab:green"),
                  "HOPF": ("*", "tab:red"), "FOLD": ("^", "tab:green"), "BP": ("o", "k")}
 
+#: What the branch figures take for ``branch``: one :class:`gfbjax.cont.Branch`, a ``{label: Branch}`` dict or a
+#: sequence of ``(label, Branch)`` pairs.  Several branches are overlaid in the same axes, one colour each, with
+#: their labels in the legend (line style still marks stability: solid stable, dashed unstable).
+Branches = Any
 
-def _save(fig, path):
-    if path is not None:
-        fig.savefig(Path(path), dpi=130, bbox_inches="tight")
-    return fig
+
+def _is_branch(obj: Any) -> bool:
+    return hasattr(obj, "lam") and hasattr(obj, "stable")
 
 
 def _segments(x: np.ndarray, y: np.ndarray, mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -44,6 +49,46 @@ def _segments(x: np.ndarray, y: np.ndarray, mask: np.ndarray) -> list[tuple[np.n
     return out
 
 
+def _stability_lines(ax, x: np.ndarray, y: np.ndarray, stable: np.ndarray, colour, label_stable: str | None = None,
+                     label_unstable: str | None = None, lw: tuple[float, float] = (1.6, 1.2)) -> None:
+    """(x, y) solid where stable and dashed where unstable; each label on the first piece of its kind."""
+    for i, (xs, ys) in enumerate(_segments(x, y, stable)):
+        ax.plot(xs, ys, "-", color=colour, lw=lw[0], label=label_stable if i == 0 else None)
+    for i, (xs, ys) in enumerate(_segments(x, y, ~stable)):
+        ax.plot(xs, ys, "--", color=colour, lw=lw[1], label=label_unstable if i == 0 else None)
+
+
+def _overlay_legend(ax, label: str | None, colour) -> None:
+    """Legend entry of one overlaid branch (a solid line in its colour)."""
+    ax.plot([], [], "-", color=colour, lw=1.6, label=label)
+
+
+def _style_legend(ax) -> None:
+    """Legend entries for the line styles of overlaid branches."""
+    ax.plot([], [], "-", color="0.4", lw=1.4, label="stable")
+    ax.plot([], [], "--", color="0.4", lw=1.2, label="unstable")
+
+
+def _end_label(ax, x: np.ndarray, y: np.ndarray, text: str, colour) -> None:
+    """Name a curve at its last point (overlays, where colour tells the branch rather than the quantity)."""
+    if len(x):
+        ax.annotate(text, (float(x[-1]), float(y[-1])), textcoords="offset points", xytext=(3, 0), fontsize=8,
+                    color=colour, va="center")
+
+
+def _mark_special(ax, s: Any, ys: Sequence[float], label: str | None = None, ms: float = 8) -> None:
+    """Markers of a special point at (s.lam, y) for each y: filled when located, hollow when only bracketed."""
+    mk, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
+    for y in ys:
+        ax.plot(s.lam, y, mk, color=colour, ms=ms, mec="k", mfc=colour if s.located else "none", label=label,
+                zorder=5)
+        label = None
+
+
+def _special_text(s: Any) -> str:
+    return f"{s.type}{'' if s.located else '?'} {s.lam:.4f}"
+
+
 def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:
     """Each special point with the row of the branch arrays it sits on (None when not stored)."""
     rows = []
@@ -61,99 +106,103 @@ def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:
     return rows
 
 
-def plot_bifurcation(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
-                     c_um: float | None = None, title: str | None = None, path: str | Path | None = None):
+def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
+                     c_um: float | None = None, title: str | None = None, path: str | Path | None = None,
+                     ax: Any = None):
     """Bifurcation diagram of a cycle branch: max and min over the cycle of the journal vertical (top) and
-    horizontal (bottom) displacement against Omega_bar; stable solid, unstable dashed; special points marked.
+    horizontal (bottom) displacement against Omega_bar; stable solid, unstable dashed; special points marked
+    (located filled, only bracketed hollow with a "?"), points with a doubtful stability label
+    (``branch.flagged``) as grey crosses.
 
+    ``branch``: one :class:`gfbjax.cont.Branch` (max red, min blue), or several as a ``{label: Branch}`` dict or
+    ``(label, Branch)`` pairs, overlaid with one colour per branch (its max and min) and its label in the legend.
     ``columns`` are the columns of ``branch.xmax`` holding ``names`` (the recorded rotor components are
-    x_j, y_j[, x_d, y_d])."""
-    import matplotlib.pyplot as plt
-
-    lam = np.asarray(branch.lam, float)
-    order = np.arange(len(lam))  # keep the branch order (folds)
-    stable = np.asarray(branch.stable, bool)
+    x_j, y_j[, x_d, y_d]).  ``ax``: None (a new figure) or 2 Axes (vertical, horizontal panel) to draw into; then
+    their figure is returned and gets a suptitle only when ``title`` is given."""
+    items, several = labelled(branch, _is_branch)
     col_of = dict(zip(names, columns))
     panels = [("y_j", "vertical $y_j/c$"), ("x_j", "horizontal $x_j/c$")]
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    rows = _special_rows(branch)
-    for ax, (name, label) in zip(axes, panels):
+    fig, axes, new = axes_grid(ax, 2, 1, figsize=(8, 7), sharex=True)
+    axes = axes[:, 0]
+    for a, (name, label) in zip(axes, panels):
         k = col_of[name]
-        for arr, colour, ext in ((branch.xmax, "tab:red", "max"), (branch.xmin, "tab:blue", "min")):
-            v = np.asarray(arr, float)[order, k]
-            first = True
-            for xs, ys in _segments(lam, v, stable):
-                ax.plot(xs, ys, "-", color=colour, lw=1.6, label=f"{ext} (stable)" if first else None)
-                first = False
-            first = True
-            for xs, ys in _segments(lam, v, ~stable):
-                ax.plot(xs, ys, "--", color=colour, lw=1.2, label=f"{ext} (unstable)" if first else None)
-                first = False
-        flagged = np.asarray(branch.flagged, bool)
-        if flagged.any():  # stability labels that the trivial multiplier's error does not support
-            k_arr = np.asarray(branch.xmax, float)[:, k]
-            ax.plot(lam[flagged], k_arr[flagged], "x", color="0.4", ms=6, zorder=4,
-                    label="inaccurate (trivial multiplier)")
-        seen = set()
-        for s, row in rows:
-            if row is None:
-                continue
-            mk, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
-            # an unlocated point is only bracketed between two rows: hollow marker, "?" in the label
-            key = s.type if s.located else f"{s.type} (not located)"
-            for arr in (branch.xmax, branch.xmin):
-                ax.plot(s.lam, float(np.asarray(arr)[row, k]), mk, color=colour, ms=8, mec="k",
-                        mfc=colour if s.located else "none", label=key if key not in seen else None, zorder=5)
+        seen: set[str] = set()
+        for (blabel, b), colour in zip(items, colours(len(items))):
+            lam = np.asarray(b.lam, float)
+            stable = np.asarray(b.stable, bool)
+            for arr, c, ext in ((b.xmax, colour if several else "tab:red", "max"),
+                                (b.xmin, colour if several else "tab:blue", "min")):
+                _stability_lines(a, lam, np.asarray(arr, float)[:, k], stable, c,
+                                 None if several else f"{ext} (stable)", None if several else f"{ext} (unstable)")
+            if several:
+                _overlay_legend(a, blabel, colour)
+            flagged = np.asarray(b.flagged, bool)
+            if flagged.any():  # stability labels that the trivial multiplier's error does not support
+                key = "inaccurate (trivial multiplier)"
+                a.plot(lam[flagged], np.asarray(b.xmax, float)[flagged, k], "x", color="0.4", ms=6, zorder=4,
+                       label=key if key not in seen else None)
                 seen.add(key)
-            ax.annotate(f"{s.type}{'' if s.located else '?'} {s.lam:.4f}",
-                        (s.lam, float(np.asarray(branch.xmax)[row, k])),
-                        textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
-        ax.set_ylabel(label + (f"  (c = {c_um:.1f} um)" if c_um else ""))
-        ax.grid(alpha=0.3)
+            for s, row in _special_rows(b):
+                if row is None:
+                    continue
+                key = s.type if s.located else f"{s.type} (not located)"
+                ys = [float(np.asarray(arr)[row, k]) for arr in (b.xmax, b.xmin)]
+                _mark_special(a, s, ys, label=key if key not in seen else None)
+                seen.add(key)
+                a.annotate(_special_text(s), (s.lam, ys[0]), textcoords="offset points", xytext=(6, 8), fontsize=8,
+                           color=SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
+        a.set_ylabel(label + (f"  (c = {c_um:.1f} um)" if c_um else ""))
+        a.grid(alpha=0.3)
+    if several:
+        _style_legend(axes[0])
     axes[0].legend(loc="best", fontsize=7, ncol=2)
     axes[1].set_xlabel(r"speed $\bar\Omega$")
-    fig.suptitle(title or "Limit cycles: bifurcation diagram")
-    fig.tight_layout()
-    return _save(fig, path)
+    return finish(fig, path, new=new, title=title, default="Limit cycles: bifurcation diagram", tight=True, dpi=130)
 
 
-def plot_multipliers(branch: Any, *, n_show: int | None = 8, title: str | None = None,
-                     path: str | Path | None = None):
+def plot_multipliers(branch: Branches, *, n_show: int | None = 8, title: str | None = None,
+                     path: str | Path | None = None, ax: Any = None):
     """Floquet multipliers of every point of a cycle branch in the complex plane with the unit circle, coloured
-    by Omega_bar; the multipliers of the special points are ringed.  ``n_show``: the largest in modulus per point
-    (None: all)."""
-    import matplotlib.pyplot as plt
+    by Omega_bar (with a colour bar); the multipliers of the special points are ringed.  ``n_show``: the largest
+    in modulus per point (None: all).
 
-    lam = np.asarray(branch.lam, float)
-    mu = np.asarray(branch.multipliers)
-    if n_show is not None:
-        mu = mu[:, :n_show]
-    fig, ax = plt.subplots(figsize=(6.8, 6))
+    ``branch``: one :class:`gfbjax.cont.Branch`, or several as a ``{label: Branch}`` dict or ``(label, Branch)``
+    pairs: then each branch's multipliers get one colour and its label in the legend (no speed colour bar).
+    ``ax``: None (a new figure) or one Axes to draw into (its figure is returned); ``title`` is the axes title."""
+    items, several = labelled(branch, _is_branch)
+    fig, axes, new = axes_grid(ax, 1, 1, figsize=(6.8, 6))
+    a = axes[0, 0]
     th = np.linspace(0, 2 * np.pi, 400)
-    ax.plot(np.cos(th), np.sin(th), "k-", lw=0.8, label="unit circle")
-    if mu.size:
-        cc = np.repeat(lam[:, None], mu.shape[1], axis=1)
-        sc = ax.scatter(mu.real.ravel(), mu.imag.ravel(), c=cc.ravel(), s=9, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=r"speed $\bar\Omega$")
-    for s in branch.special:
-        m = s.spectrum
-        if m is None:
-            continue
-        m = np.asarray(m)
-        if m.ndim == 2:  # [re, im] pairs from JSON
-            m = m[:, 0] + 1j * m[:, 1]
-        m = m[:n_show] if n_show is not None else m
-        _, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
-        ax.scatter(m.real, m.imag, s=70, facecolors="none", edgecolors=colour, lw=1.5,
-                   label=f"{s.type} at {s.lam:.4f}")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(r"Re $\mu$")
-    ax.set_ylabel(r"Im $\mu$")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper left", fontsize=7)
-    ax.set_title(title or "Floquet multipliers")
-    fig.tight_layout()
-    return _save(fig, path)
+    a.plot(np.cos(th), np.sin(th), "k-", lw=0.8, label="unit circle")
+    for (blabel, b), colour in zip(items, colours(len(items))):
+        lam = np.asarray(b.lam, float)
+        mu = np.asarray(b.multipliers)
+        if n_show is not None:
+            mu = mu[:, :n_show]
+        if mu.size and several:
+            a.scatter(mu.real.ravel(), mu.imag.ravel(), s=9, color=colour, label=blabel)
+        elif mu.size:
+            cc = np.repeat(lam[:, None], mu.shape[1], axis=1)
+            sc = a.scatter(mu.real.ravel(), mu.imag.ravel(), c=cc.ravel(), s=9, cmap="viridis")
+            fig.colorbar(sc, ax=a, label=r"speed $\bar\Omega$")
+        for s in b.special:
+            m = s.spectrum
+            if m is None:
+                continue
+            m = np.asarray(m)
+            if m.ndim == 2:  # [re, im] pairs from JSON
+                m = m[:, 0] + 1j * m[:, 1]
+            m = m[:n_show] if n_show is not None else m
+            _, c = SPECIAL_STYLE.get(s.type, ("o", "k"))
+            a.scatter(m.real, m.imag, s=70, facecolors="none", edgecolors=c, lw=1.5,
+                      label=(f"{blabel}: " if several else "") + f"{s.type} at {s.lam:.4f}")
+    a.set_aspect("equal", adjustable="datalim")
+    a.set_xlabel(r"Re $\mu$")
+    a.set_ylabel(r"Im $\mu$")
+    a.grid(alpha=0.3)
+    a.legend(loc="upper left", fontsize=7)
+    a.set_title(title or "Floquet multipliers")
+    return finish(fig, path, new=new, title=None, tight=True, dpi=130)
 
 
 def critical_real_part(branch: Any) -> np.ndarray:
@@ -162,91 +211,119 @@ def critical_real_part(branch: Any) -> np.ndarray:
     return ev.real.max(axis=1) if ev.size else np.zeros(0)
 
 
-def plot_equilibria(branch: Any, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
-                    title: str | None = None, path: str | Path | None = None):
-    """Equilibrium branch of the balanced rotor: journal position (x_j, y_j over c) and the real part of the
-    critical eigenvalue against Omega_bar (stable solid, unstable dashed), Hopf and fold points marked."""
-    import matplotlib.pyplot as plt
+def plot_equilibria(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
+                    title: str | None = None, path: str | Path | None = None, ax: Any = None):
+    """Equilibrium branch of the balanced rotor: journal position (x_j, y_j over c; top) and the real part of the
+    critical eigenvalue (bottom) against Omega_bar (stable solid, unstable dashed), Hopf and fold points marked
+    (located filled, only bracketed hollow with a "?").
 
-    lam = np.asarray(branch.lam, float)
-    stable = np.asarray(branch.stable, bool)
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    colours = ("tab:blue", "tab:red")
-    for name, k, colour in zip(names, columns, colours):
-        v = np.asarray(branch.xmax, float)[:, k]
-        for i, (xs, ys) in enumerate(_segments(lam, v, stable)):
-            axes[0].plot(xs, ys, "-", color=colour, lw=1.6, label=f"${name[0]}_j/c$ (stable)" if i == 0 else None)
-        for i, (xs, ys) in enumerate(_segments(lam, v, ~stable)):
-            axes[0].plot(xs, ys, "--", color=colour, lw=1.2, label=f"${name[0]}_j/c$ (unstable)" if i == 0 else None)
-    re = critical_real_part(branch)
-    axes[1].plot(lam, re, "-", color="k", lw=1.4, label=r"max Re $\lambda$")
+    ``branch``: one :class:`gfbjax.cont.Branch` (x_j blue, y_j red), or several as a ``{label: Branch}`` dict or
+    ``(label, Branch)`` pairs, overlaid with one colour per branch and its label in the legend (the components
+    are then named at the end of their lines).  ``ax``: None (a new figure) or 2 Axes (position, eigenvalue) to
+    draw into; then their figure is returned and gets a suptitle only when ``title`` is given."""
+    items, several = labelled(branch, _is_branch)
+    fig, axes, new = axes_grid(ax, 2, 1, figsize=(8, 7), sharex=True)
+    axes = axes[:, 0]
+    for (blabel, b), colour in zip(items, colours(len(items))):
+        lam = np.asarray(b.lam, float)
+        stable = np.asarray(b.stable, bool)
+        for name, k, c in zip(names, columns, (colour, colour) if several else ("tab:blue", "tab:red")):
+            v = np.asarray(b.xmax, float)[:, k]
+            if several:
+                _stability_lines(axes[0], lam, v, stable, c)
+                _end_label(axes[0], lam, v, f"${name[0]}_j$", c)
+            else:
+                _stability_lines(axes[0], lam, v, stable, c, f"${name[0]}_j/c$ (stable)", f"${name[0]}_j/c$ (unstable)")
+        if several:
+            _overlay_legend(axes[0], blabel, colour)
+        re = critical_real_part(b)
+        axes[1].plot(lam, re, "-", color=colour if several else "k", lw=1.4,
+                     label=blabel if several else r"max Re $\lambda$")
+        for s, row in _special_rows(b):
+            if row is None:
+                continue
+            lab = (f"{blabel}: " if several else "") + _special_text(s)
+            _mark_special(axes[0], s, [float(np.asarray(b.xmax)[row, k]) for k in columns], ms=10)
+            axes[0].annotate(_special_text(s), (s.lam, float(np.asarray(b.xmax)[row, columns[-1]])),
+                             textcoords="offset points", xytext=(6, 8), fontsize=8,
+                             color=SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
+            _mark_special(axes[1], s, [float(re[row])], label=lab, ms=10)
+    if several:
+        _style_legend(axes[0])
     axes[1].axhline(0.0, color="0.5", lw=0.8)
-    for s, row in _special_rows(branch):
-        if row is None:
-            continue
-        mk, colour = SPECIAL_STYLE.get(s.type, ("o", "k"))
-        lab = f"{s.type} {s.lam:.4f}"
-        for name, k in zip(names, columns):
-            axes[0].plot(s.lam, float(np.asarray(branch.xmax)[row, k]), mk, color=colour, ms=10, mec="k")
-        axes[0].annotate(lab, (s.lam, float(np.asarray(branch.xmax)[row, columns[-1]])),
-                         textcoords="offset points", xytext=(6, 8), fontsize=8, color=colour)
-        axes[1].plot(s.lam, float(re[row]), mk, color=colour, ms=10, mec="k", label=lab)
     axes[0].set_ylabel("journal position over c")
     axes[1].set_ylabel(r"critical eigenvalue Re $\lambda$ (per $\tau$)")
     axes[1].set_xlabel(r"speed $\bar\Omega$")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-        ax.legend(loc="best", fontsize=7)
-    fig.suptitle(title or "Equilibria of the balanced rotor")
-    fig.tight_layout()
-    return _save(fig, path)
+    for a in axes:
+        a.grid(alpha=0.3)
+        a.legend(loc="best", fontsize=7)
+    return finish(fig, path, new=new, title=title, default="Equilibria of the balanced rotor", tight=True, dpi=130)
 
 
-def plot_energy(branches: Sequence[tuple[str, Any, Any]], *, title: str | None = None,
-                path: str | Path | None = None):
+_ENERGY_STYLE = {"W_fu": ("$W_{fu}$", "k"), "W_cf": ("$W_{cf}$", "tab:green"), "W_cb": ("$W_{cb}$", "tab:red")}
+
+
+def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[str] = ("W_fu", "W_cf", "W_cb"),
+                title: str | None = None, path: str | Path | None = None, ax: Any = None):
     """Energy flow along cycle branches (paper Fig. 12): W_fu, W_cf and W_cb [p0 R L c] against Omega_bar, one
     panel per design; stable solid, unstable dashed; NS points and the sign changes of W_cb marked.
 
-    ``branches``: (label, branch, :class:`gfbjax.analyses.energy.CycleEnergy` of its points) per design."""
-    import matplotlib.pyplot as plt
-
+    ``branches``: ``(label, branch, energy)`` triples, a ``{label: (branch, energy)}`` dict, or one
+    ``(branch, energy)`` pair, with ``energy`` the :class:`gfbjax.analyses.energy.CycleEnergy` of the branch's
+    points.  ``overlay``: all designs in one panel, one colour per design with its label in the legend (each
+    curve named at its end) instead of one panel each.  ``quantities``: which of W_fu, W_cf, W_cb to draw.
+    ``ax``: None (a new figure: panels in two columns) or one Axes per panel (one per design, or one with
+    ``overlay``) to draw into; then their figure is returned and gets a suptitle only when ``title`` is given."""
     from ..analyses.energy import sign_changes
 
-    k = len(branches)
+    items, _ = labelled(branches, lambda o: isinstance(o, tuple) and len(o) == 2 and _is_branch(o[0]))
+    unknown = set(quantities) - set(_ENERGY_STYLE)
+    if unknown:
+        raise ValueError(f"quantities: unknown {sorted(unknown)}; choose from {list(_ENERGY_STYLE)}")
+    k = 1 if overlay else len(items)
     ncol = 2 if k > 1 else 1
     nrow = (k + ncol - 1) // ncol
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
-    for ax, (label, b, E) in zip(axes.ravel(), branches):
+    if ax is None:
+        fig, axes, new = axes_grid(None, nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow))
+    else:
+        fig, axes, new = axes_grid(ax, 1, k)
+    panels = list(axes.ravel())
+    for i, ((label, (b, E)), colour) in enumerate(zip(items, colours(len(items)))):
+        a = panels[0 if overlay else i]
         lam = np.asarray(b.lam, float)
         stable = np.asarray(b.stable, bool)
-        for W, name, colour in ((E.W_fu, "$W_{fu}$", "k"), (E.W_cf, "$W_{cf}$", "tab:green"),
-                                (E.W_cb, "$W_{cb}$", "tab:red")):
-            W = np.asarray(W, float)
-            for i, (xs, ys) in enumerate(_segments(lam, W, stable)):
-                ax.plot(xs, ys, "-", color=colour, lw=1.6, label=name if i == 0 else None)
-            for xs, ys in _segments(lam, W, ~stable):
-                ax.plot(xs, ys, "--", color=colour, lw=1.1)
+        for q in quantities:
+            name, c = _ENERGY_STYLE[q]
+            W = np.asarray(getattr(E, q), float)
+            _stability_lines(a, lam, W, stable, colour if overlay else c, None if overlay else name, lw=(1.6, 1.1))
+            if overlay:
+                _end_label(a, lam, W, name, colour)
+        if overlay:
+            _overlay_legend(a, label, colour)
         for s in b.special_of("NS"):
-            ax.axvline(s.lam, color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
-            ax.annotate(f"NS {s.lam:.4f}", (s.lam, 0.0), textcoords="offset points",
-                        xytext=(4, 10), fontsize=8, color=SPECIAL_STYLE["NS"][1])
+            a.axvline(s.lam, color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
+            a.annotate(f"NS {s.lam:.4f}", (s.lam, 0.0), textcoords="offset points",
+                       xytext=(4, 10), fontsize=8, color=SPECIAL_STYLE["NS"][1])
         for c in sign_changes(lam, E.W_cb):
-            ax.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec="tab:red", ms=8)
-        ax.axhline(0.0, color="0.5", lw=0.6)
-        ax.set_title(label, fontsize=10)
-        ax.set_xlabel(r"speed $\bar\Omega$")
-        ax.set_ylabel(r"work per cycle [$p_0 R L c$]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
-    for ax in axes.ravel()[k:]:
-        ax.set_visible(False)
-    fig.suptitle(title or "Energy flow of the limit cycles (solid stable, dashed unstable; o: W_cb = 0)")
-    fig.tight_layout()
-    return _save(fig, path)
+            a.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec=colour if overlay else "tab:red", ms=8)
+        if not overlay:
+            a.set_title(label or "", fontsize=10)
+    for a in panels[:k]:
+        if overlay:
+            _style_legend(a)
+        a.axhline(0.0, color="0.5", lw=0.6)
+        a.set_xlabel(r"speed $\bar\Omega$")
+        a.set_ylabel(r"work per cycle [$p_0 R L c$]")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8, loc="best")
+    for a in panels[k:]:
+        a.set_visible(False)
+    return finish(fig, path, new=new, title=title, tight=True, dpi=130,
+                  default="Energy flow of the limit cycles (solid stable, dashed unstable; o: W_cb = 0)")
 
 
-def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 8, title: str | None = None,
-                  path: str | Path | None = None):
+def plot_schedule(schedules: Any, *, n_show: int | None = 8, title: str | None = None,
+                  path: str | Path | None = None, ax: Any = None):
     """Optimised foil schedules along the speed (paper Figs. 16-19), one line (colour) per schedule:
 
     a) journal orbit extent, the max and min over the cycle of y_j (solid) and x_j (dotted) [c];
@@ -256,14 +333,14 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
     f) the ``n_show`` largest multipliers of every speed in the complex plane with the unit circle.
 
     Unstable optimised cycles (where a march ends) are marked with a cross.  ``schedules``: (label,
-    :class:`gfbjax.design.schedule.Schedule`) pairs."""
-    import matplotlib.pyplot as plt
-
+    :class:`gfbjax.design.schedule.Schedule`) pairs, a ``{label: Schedule}`` dict or one Schedule.  ``ax``: None
+    (a new figure) or 6 Axes (a-f, a 3 x 2 layout in row-major order) to draw into; then their figure is returned
+    and gets a suptitle only when ``title`` is given."""
     from ..design.evaluate import FOIL_BOUNDS
 
-    fig, axes = plt.subplots(3, 2, figsize=(12, 11.5))
+    items, _ = labelled(schedules, lambda o: hasattr(o, "alpha_f") and hasattr(o, "omega"))
+    fig, axes, new = axes_grid(ax, 3, 2, figsize=(12, 11.5))
     ax_j, ax_a, ax_e, ax_mu, ax_w, ax_c = axes.ravel()
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     th = np.linspace(0, 2 * np.pi, 400)
     ax_c.plot(np.cos(th), np.sin(th), "k-", lw=0.8, label="unit circle")
     ax_mu.axhline(1.0, color="k", ls="--", lw=0.9, label=r"$|\mu| = 1$")
@@ -272,8 +349,7 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
         for v in FOIL_BOUNDS[name]:
             ax.axhline(v, color="0.5", ls=":", lw=0.9)
     any_unstable = False
-    for i, (label, s) in enumerate(schedules):
-        colour = colours[i % len(colours)]
+    for (label, s), colour in zip(items, colours(len(items))):
         w = np.asarray(s.omega, float)
         if w.size == 0:
             continue
@@ -289,7 +365,7 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
         jmax = np.asarray(s.journal_max, float).reshape(len(w), -1)
         jmin = np.asarray(s.journal_min, float).reshape(len(w), -1)
         for k, (name, ls) in ((1, ("y", "-")), (0, ("x", ":"))):
-            line(ax_j, jmax[:, k], ls, f"{label}: ${name}_j$")
+            line(ax_j, jmax[:, k], ls, f"{label}: ${name}_j$" if label else f"${name}_j$")
             line(ax_j, jmin[:, k], ls, None)
         line(ax_a, s.alpha_f)
         line(ax_e, s.eta)
@@ -322,6 +398,5 @@ def plot_schedule(schedules: Sequence[tuple[str, Any]], *, n_show: int | None = 
     for ax in axes.ravel():
         if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=7, loc="best")
-    fig.suptitle(title or "Optimised foil along the speed (x: unstable optimised cycle)")
-    fig.tight_layout()
-    return _save(fig, path)
+    return finish(fig, path, new=new, title=title, tight=True, dpi=130,
+                  default="Optimised foil along the speed (x: unstable optimised cycle)")

@@ -1,10 +1,12 @@
 """Matplotlib figures of gfbjax results.
 
 Every function returns the :class:`matplotlib.figure.Figure` and, given ``path``, also saves it (the format follows
-the file suffix, e.g. ``.png`` or ``.pdf``).  Figures are made with ``pyplot`` so that they show inline in
-notebooks; scripts that make many figures should ``plt.close(fig)`` after saving.  Importing this module leaves
-the matplotlib backend as it is (matplotlib itself falls back to the non-interactive Agg backend without a
-display; the ``gfbjax`` command line selects Agg explicitly).
+the file suffix, e.g. ``.png`` or ``.pdf``).  Given ``ax`` (the Axes of an existing figure, as many as the figure
+has panels, in row-major order), a function draws into them and returns their figure instead of making one.
+Figures are made with ``pyplot`` so that they show inline in notebooks; scripts that make many figures should
+``plt.close(fig)`` after saving.  Importing this module leaves the matplotlib backend as it is (matplotlib itself
+falls back to the non-interactive Agg backend without a display; the ``gfbjax`` command line selects Agg
+explicitly).
 
 Conventions (DESIGN.md): lengths over the radial clearance ``c``, pressures over ambient ``p0``, time over
 ``t* = 6 mu R^2 / (p0 c^2)``; y points up, gravity and the extra load act downwards; theta is measured from the
@@ -23,13 +25,14 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+
+from ._common import axes_grid, finish, save_figure
 
 __all__ = ["plot_load_displacement", "plot_equilibrium_locus", "plot_static_summary", "save_figure"]
 
@@ -39,15 +42,6 @@ _CONTACT_COLOR = "black"
 
 
 # -- helpers -------------------------------------------------------------------------------------------------
-
-
-def save_figure(fig: Figure, path: str | os.PathLike | None, dpi: int = 150) -> Figure:
-    """Save ``fig`` to ``path`` (folders created; format from the suffix) when ``path`` is given; return it."""
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi, bbox_inches="tight")
-    return fig
 
 
 def _nested(curves: Any) -> dict[float | None, dict[float, list]]:
@@ -159,7 +153,7 @@ def _speed_colors(n: int):
 
 def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None = None,
                            path: str | os.PathLike | None = None, title: str | None = None,
-                           sharey: bool = False) -> Figure:
+                           sharey: bool = False, ax: Any = None) -> Figure:
     """Vertical journal displacement against specific load (paper Fig. 4).
 
     One panel per foil compliance alpha_f, one line per speed Omega_bar.  A curve that ended because the film
@@ -173,7 +167,9 @@ def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None 
         c_um: radial clearance in micrometres, for the right axis when no ``spec`` is given.
         path: file to save to (optional).
         title: figure title (optional).
-        sharey: share the displacement axis between panels.
+        sharey: share the displacement axis between panels (new figure only).
+        ax: None (a new figure) or one Axes per alpha_f panel (a row of them) to draw into; then their figure is
+            returned and gets a suptitle only when ``title`` is given.
 
     Returns:
         The figure.  Axes: x = extra specific load ``W/(p0 L D)`` per bearing beyond gravity [-];
@@ -184,8 +180,7 @@ def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None 
         c_um = spec.c * 1e6
     w_g = _gravity_w(spec)
     n = len(data)
-    fig, axes = plt.subplots(1, n, figsize=(4.6 * n + 0.6, 4.2), squeeze=False, sharey=sharey,
-                             constrained_layout=True)
+    fig, axes, new = axes_grid(ax, 1, n, figsize=(4.6 * n + 0.6, 4.2), sharey=sharey, constrained_layout=True)
     for ax, (alpha, by_speed) in zip(axes[0], data.items()):
         colors = _speed_colors(len(by_speed))
         contact_any = False
@@ -230,9 +225,7 @@ def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None 
             f_n = spec.p0 * spec.L * 2.0 * spec.R
             top = ax.secondary_xaxis("top", functions=(lambda v, f=f_n: v * f, lambda v, f=f_n: v / f))
             top.set_xlabel("extra load per bearing $W$ [N]", fontsize=8)
-    if title:
-        fig.suptitle(title)
-    return save_figure(fig, path)
+    return finish(fig, path, new=new, title=title)
 
 
 # -- Fig. 5 -----------------------------------------------------------------------------------------------------
@@ -240,7 +233,7 @@ def plot_load_displacement(curves: Any, *, spec: Any = None, c_um: float | None 
 
 def plot_equilibrium_locus(results: Any, *, spec: Any = None, profile_speed: float | None = None,
                            max_profiles: int = 6, path: str | os.PathLike | None = None,
-                           title: str | None = None) -> Figure:
+                           title: str | None = None, ax: Any = None) -> Figure:
     """Equilibrium locus, mid-plane pressure and foil deflection (paper Fig. 5).
 
     One row per foil compliance alpha_f.  Left: the journal centre ``(x_j, y_j)/c`` for increasing load, one line
@@ -256,11 +249,13 @@ def plot_equilibrium_locus(results: Any, *, spec: Any = None, profile_speed: flo
         max_profiles: most loads shown in the profile panels (evenly picked, always with the first and last).
         path: file to save to (optional).
         title: figure title (optional).
+        ax: None (a new figure) or 3 Axes per alpha_f row (locus, pressure, foil; n rows x 3, row-major) to draw
+            into; then their figure is returned and gets a suptitle only when ``title`` is given.
     """
     data = _nested(results)
     n = len(data)
-    fig, axes = plt.subplots(n, 3, figsize=(14.0, 3.9 * n + 0.4), squeeze=False, constrained_layout=True,
-                             gridspec_kw={"width_ratios": [1.0, 1.35, 1.35]})
+    fig, axes, new = axes_grid(ax, n, 3, figsize=(14.0, 3.9 * n + 0.4), constrained_layout=True,
+                               gridspec_kw={"width_ratios": [1.0, 1.35, 1.35]})
     for row, (alpha, by_speed) in zip(axes, data.items()):
         ax_l, ax_p, ax_q = row
         speeds = sorted(by_speed)
@@ -325,11 +320,10 @@ def plot_equilibrium_locus(results: Any, *, spec: Any = None, profile_speed: flo
         handles += [Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="0.3", mew=1.4)]
         labels += ["profile shown"]
         ax_l.legend(handles, labels, fontsize=7, loc="upper left")
-    if title is None and spec is not None:
-        title = f"Equilibrium locus and profiles (c = {spec.c * 1e6:.1f} µm; stable: solid, unstable: dashed)"
-    if title:
-        fig.suptitle(title)
-    return save_figure(fig, path)
+    default = None
+    if spec is not None:
+        default = f"Equilibrium locus and profiles (c = {spec.c * 1e6:.1f} µm; stable: solid, unstable: dashed)"
+    return finish(fig, path, new=new, title=title, default=default)
 
 
 # -- single equilibrium ------------------------------------------------------------------------------------------
@@ -380,7 +374,7 @@ def _symlog_real_axis(ax, ev: np.ndarray) -> None:
 
 
 def plot_static_summary(result: Any, spec: Any = None, *, path: str | os.PathLike | None = None,
-                        n_modes: int = 12, title: str | None = None) -> Figure:
+                        n_modes: int = 12, title: str | None = None, ax: Any = None) -> Figure:
     """One static equilibrium at a glance.
 
     Panels: (a) pressure field ``p/p0`` over theta and the bearing length (the computed half mirrored about the
@@ -396,16 +390,12 @@ def plot_static_summary(result: Any, spec: Any = None, *, path: str | os.PathLik
         path: file to save to (optional).
         n_modes: most eigenvalues in the zoom window.
         title: figure title (default: speed, load, outcome).
+        ax: None (a new figure) or 6 Axes (panels a-f, 2 x 3, row-major) to draw into; then their figure is
+            returned and gets a suptitle only when ``title`` is given.
     """
     r = result
-    fig = plt.figure(figsize=(15.0, 8.6), constrained_layout=True)
-    gs = fig.add_gridspec(2, 3)
-    ax_f = fig.add_subplot(gs[0, 0])
-    ax_p = fig.add_subplot(gs[0, 1])
-    ax_q = fig.add_subplot(gs[0, 2])
-    ax_h = fig.add_subplot(gs[1, 0])
-    ax_e = fig.add_subplot(gs[1, 1])
-    ax_z = fig.add_subplot(gs[1, 2])
+    fig, axes, new = axes_grid(ax, 2, 3, figsize=(15.0, 8.6), constrained_layout=True)
+    (ax_f, ax_p, ax_q), (ax_h, ax_e, ax_z) = axes
     tdeg = _theta_deg(r)
 
     # (a) pressure field over the full length (mirror the half domain about the mid-plane z = 1/2)
@@ -512,12 +502,9 @@ def plot_static_summary(result: Any, spec: Any = None, *, path: str | os.PathLik
             sec = ax_z.secondary_yaxis("right", functions=(lambda v, k=fhz: v * k, lambda v, k=fhz: v / k))
             sec.set_ylabel("frequency [Hz]")
 
-    if title is None:
-        speed = rf"$\bar\Omega = {r.omega:g}$"
-        if spec is not None:
-            speed += f" ({spec.rpm(r.omega):.0f} rpm)"
-        load = rf"$\bar W = {r.w:g}$ beyond gravity"
-        pos = rf"$(x_j, y_j) = ({r.x_j:.3f}, {r.y_j:.3f})\,c$, $\epsilon = {r.eccentricity:.3f}$"
-        title = f"Static equilibrium: {speed}, {load}; {pos}; {r.outcome}"
-    fig.suptitle(title)
-    return save_figure(fig, path)
+    speed = rf"$\bar\Omega = {r.omega:g}$"
+    if spec is not None:
+        speed += f" ({spec.rpm(r.omega):.0f} rpm)"
+    load = rf"$\bar W = {r.w:g}$ beyond gravity"
+    pos = rf"$(x_j, y_j) = ({r.x_j:.3f}, {r.y_j:.3f})\,c$, $\epsilon = {r.eccentricity:.3f}$"
+    return finish(fig, path, new=new, title=title, default=f"Static equilibrium: {speed}, {load}; {pos}; {r.outcome}")

@@ -1,6 +1,7 @@
 """Figures of transient runs (paper Figs. 7-11, panels a-c): run-up time history against speed with optional
 max/min of continuation cycles, STFT spectrogram against speed in multiples of the running frequency, and the
-orbit + Poincare points + FFT at one speed."""
+orbit + Poincare points + FFT at one speed.  Every function takes ``ax=``: None (a new figure) or the Axes to draw
+into (as many as the figure has panels; their figure is returned), and ``path=`` to save."""
 
 from __future__ import annotations
 
@@ -10,18 +11,13 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..analyses.signals import Spectrogram, poincare_section, spectrum
+from ._common import axes_grid, finish
 
 __all__ = ["plot_runup", "plot_spectrogram", "plot_orbit_poincare_fft"]
 
 
-def _save(fig, path):
-    if path is not None:
-        fig.savefig(Path(path), dpi=130, bbox_inches="tight")
-    return fig
-
-
 def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c_um: float | None = None,
-               title: str | None = None, path: str | Path | None = None):
+               title: str | None = None, path: str | Path | None = None, ax: Any = None):
     """Journal vertical (a) and horizontal (b) displacement against speed during a run-up (paper Fig. 7a/7b).
 
     Args:
@@ -30,10 +26,11 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
             ``y_max``, ``y_min``, ``x_max``, ``x_min`` (over c), optionally ``stable`` (bool per speed; unstable
             cycles are drawn dashed).
         c_um: clearance in um for a secondary axis label (None: over c only).
+        ax: None (a new figure) or 2 Axes (vertical, horizontal) to draw into; then their figure is returned and
+            gets a suptitle only when ``title`` is given.
     """
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
+    fig, axes, new = axes_grid(ax, 2, 1, figsize=(8, 6.5), sharex=True)
+    axes = axes[:, 0]
     for ax, key, label in ((axes[0], "y", "vertical $y_j/c$"), (axes[1], "x", "horizontal $x_j/c$")):
         sig = result.y_j if key == "y" else result.x_j
         ax.plot(result.speed, sig, lw=0.4, color="0.35", label="time integration (run-up)")
@@ -51,22 +48,23 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
         ax.grid(alpha=0.3)
     axes[0].legend(loc="best", fontsize=7)
     axes[1].set_xlabel(r"speed $\bar\Omega$")
-    fig.suptitle(title or "Run-up: journal response against speed (paper Fig. 7a/b)")
-    fig.tight_layout()
-    return _save(fig, path)
+    return finish(fig, path, new=new, title=title, tight=True, dpi=130,
+                  default="Run-up: journal response against speed (paper Fig. 7a/b)")
 
 
 def plot_spectrogram(sg: Spectrogram, *, max_order: float | None = None, db_range: float = 60.0,
-                     subsync: list | None = None, title: str | None = None, path: str | Path | None = None):
+                     subsync: list | None = None, title: str | None = None, path: str | Path | None = None,
+                     ax: Any = None):
     """STFT amplitude against speed and order (multiples of the running frequency; paper Fig. 7c) with the 1X
-    line; ``subsync`` ranges (from :func:`gfbjax.analyses.signals.subsynchronous`) are marked."""
-    import matplotlib.pyplot as plt
-
+    line; ``subsync`` ranges (from :func:`gfbjax.analyses.signals.subsynchronous`) are marked.  ``ax``: None (a
+    new figure) or one Axes to draw into (its figure is returned, with the colour bar beside the Axes);
+    ``title`` is the axes title."""
     o = sg.order if max_order is None else sg.order[sg.order <= max_order]
     A = sg.order_amplitude[:, : o.size]
     ref = max(float(A.max()), 1e-300)
     db = 20 * np.log10(np.maximum(A / ref, 10 ** (-db_range / 20)))
-    fig, ax = plt.subplots(figsize=(8, 4.8))
+    fig, axes, new = axes_grid(ax, 1, 1, figsize=(8, 4.8))
+    ax = axes[0, 0]
     m = ax.pcolormesh(sg.speed, o, db.T, shading="nearest", cmap="viridis", vmin=-db_range, vmax=0)
     fig.colorbar(m, ax=ax, label="amplitude [dB re max]")
     ax.axhline(1.0, color="w", ls="--", lw=0.8, label="1X")
@@ -77,19 +75,19 @@ def plot_spectrogram(sg: Spectrogram, *, max_order: float | None = None, db_rang
     ax.set_ylabel("frequency / running frequency")
     ax.legend(loc="upper right", fontsize=7)
     ax.set_title(title or "STFT of the run-up (paper Fig. 7c)")
-    fig.tight_layout()
-    return _save(fig, path)
+    return finish(fig, path, new=new, title=None, tight=True, dpi=130)
 
 
 def plot_orbit_poincare_fft(result: Any, *, last: int = 100, max_order: float = 4.0, classification: Any = None,
-                            title: str | None = None, path: str | Path | None = None):
+                            title: str | None = None, path: str | Path | None = None, ax: Any = None):
     """Journal orbit over the last ``last`` revolutions with its Poincare points (once per revolution) and the FFT
-    of the vertical response in multiples of the running speed (paper Fig. 8c style)."""
-    import matplotlib.pyplot as plt
-
+    of the vertical response in multiples of the running speed (paper Fig. 8c style).  ``ax``: None (a new figure)
+    or 3 Axes (orbit, Poincare map, FFT) to draw into; then their figure is returned and gets a suptitle only when
+    ``title`` is given."""
     spr = result.samples_per_rev
     sl = result.window(last)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    fig, axes, new = axes_grid(ax, 1, 3, figsize=(13, 4.2))
+    axes = axes[0]
     ax = axes[0]
     ax.plot(result.x_j[sl], result.y_j[sl], lw=0.5, color="0.3")
     P = result.poincare(last=last)
@@ -120,6 +118,5 @@ def plot_orbit_poincare_fft(result: Any, *, last: int = 100, max_order: float = 
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax.set_title("FFT")
-    fig.suptitle(title or rf"$\bar\Omega$ = {result.speed[-1]:.4g}: last {last} revolutions")
-    fig.tight_layout()
-    return _save(fig, path)
+    return finish(fig, path, new=new, title=title, tight=True, dpi=130,
+                  default=rf"$\bar\Omega$ = {result.speed[-1]:.4g}: last {last} revolutions")

@@ -7,6 +7,8 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from ...cont import Outcome
+from ...limits import NoSolutionError
 from typing import Any
 
 from ... import limits
@@ -117,7 +119,7 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
         lam = float(s.lam)
         d: dict[str, Any] = {
             "type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.period,
-            "located": bool(s.located), "residual": s.residual if s.located else None, "index": s.index,
+            "located": bool(s.located), "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
             "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
             "critical_multipliers": [[float(z.real), float(z.imag)] for z in crit[:2]],
         }
@@ -196,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     t1 = time.perf_counter()
     try:
         branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar, spec=spec)
-    except RuntimeError as exc:  # no static equilibrium at the start speed
+    except NoSolutionError as exc:  # no static equilibrium at the start speed
         bar.close()
         print(f"gfbjax cycles: {exc}", flush=True)
         return 1
@@ -262,4 +264,4 @@ def run(args: argparse.Namespace) -> int:
                       "total": time.perf_counter() - t0},
     }
     write_summary(out, "cycles.json", data)
-    return 0 if ok else 1
+    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)

@@ -8,6 +8,8 @@ import argparse
 import dataclasses
 import math
 import time
+from ...cont import Outcome
+from ...limits import NoSolutionError
 from pathlib import Path
 from typing import Any
 
@@ -94,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=progress,
                                      spec=spec)
-    except RuntimeError as exc:  # no static equilibrium at the start speed: nothing to write
+    except NoSolutionError as exc:  # no static equilibrium at the start speed: nothing to write
         print(f"gfbjax energy: {exc}", flush=True)
         return 1
     finally:
@@ -159,4 +161,4 @@ def run(args: argparse.Namespace) -> int:
                       "total": time.perf_counter() - t0},
     }
     write_summary(out, "energy.json", data)
-    return 0 if ok else 1
+    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from ...cont import Outcome
+from ...limits import NoSolutionError
 from typing import Any
 
 from ...params import ParameterError
@@ -85,7 +87,7 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
     for s in branch.special:
         lam = float(s.lam)
         d: dict[str, Any] = {"type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "located": bool(s.located),
-                             "residual": s.residual if s.located else None, "index": s.index}
+                             "residual": None if math.isnan(s.residual) else s.residual, "index": s.index}
         ev = np.asarray(s.spectrum, complex)
         d["max_real_part"] = float(ev.real.max()) if ev.size else None
         if s.type == "HOPF" and s.omega is not None:
@@ -124,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     t1 = time.perf_counter()
     try:
         branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb, spec=spec)
-    except RuntimeError as exc:
+    except NoSolutionError as exc:
         print(f"gfbjax equilibria: {exc}", flush=True)
         return 1
     t_cont = time.perf_counter() - t1
@@ -147,11 +149,18 @@ def run(args: argparse.Namespace) -> int:
             extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
                      f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
         where = (f"located, test function {d['residual']:.1e}" if d["located"] else
-                 "NOT located: bracketed by the previous point, values at the next one")
+                 f"NOT located: the test function jumps there (by {d['residual']:.1e})" if d["residual"] is not None
+                 else "NOT located: values at the first point past it")
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
     print("\n".join(lines), flush=True)
 
-    hopf = _hopf_cycles(args, params, spec, branch, out) if args.hopf_cycles and branch.special_of("HOPF") else None
+    hopf = None
+    first_hopf = branch.special_of("HOPF")[:1]
+    if args.hopf_cycles and first_hopf and not first_hopf[0].located:
+        print("  Hopf cycles       skipped: the first Hopf point was not located (its state is no Hopf point)",
+              flush=True)
+    elif args.hopf_cycles and first_hopf:
+        hopf = _hopf_cycles(args, params, spec, branch, out)
 
     figures: list[str] = []
     if hopf is not None and not args.no_figures:
@@ -180,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "total": time.perf_counter() - t0},
     }
     write_summary(out, "equilibria.json", data)
-    return 0 if ok else 1
+    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)
 
 
 def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, out: Any) -> dict:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from ...limits import NoSolutionError
 from typing import Any
 
 from ... import limits
@@ -147,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
         if args.speed is not None:
             return _one_speed(args, spec, params, x0, options, out, meta, t0)
         return _continuation(args, spec, params, x0, options, out, meta, t0)
-    except RuntimeError as exc:  # no static equilibrium at the (first) speed, or no cycle at all
+    except NoSolutionError as exc:  # no static equilibrium at the (first) speed, or no cycle at all
         print(f"gfbjax optimize: {exc}", flush=True)
         return 1
 

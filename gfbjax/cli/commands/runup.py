@@ -13,7 +13,7 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError, SystemSpec
-from ._common import add_system_options, check_range, output_dir, spec_from_args, traced_params, write_json
+from ._common import add_system_options, check_option, check_range, output_dir, spec_from_args, traced_params, write_json
 
 NAME = "runup"
 
@@ -184,6 +184,9 @@ def _check_run(args: argparse.Namespace, params: Any) -> tuple[Any, float, float
     if args.revs is not None:
         check_range("--revs", args.revs, limits.REVOLUTIONS)
     settle_revs = float(round(check_range("--settle-revs", args.settle_revs, limits.SETTLE_REVOLUTIONS)))
+    check_option("--segment-revs", args.segment_revs, 0.0, 1e4, lo_open=True, what="revolutions per STFT segment")
+    check_option("--rel", args.rel, 0.0, 1e3, lo_open=True, what="fraction of the 1X amplitude")
+    check_option("--floor", args.floor, 0.0, 1e3, what="amplitude over c")
     settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
                                  samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
     revs = 400.0 if (args.revs is None and args.accel is None) else args.revs
