@@ -129,6 +129,14 @@ def _check_speed_range(params: Params, omega_start: float, omega_end: float) -> 
     return omega_start, omega_end
 
 
+def _check_size(problem: cont.CycleProblem, settings: cont.CycleSettings) -> None:
+    """The engine's size checks (memory of the collocation system, Floquet method) as a ParameterError."""
+    try:
+        cont.check_cycle_size(problem, settings.N, settings.m, settings)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
+
+
 def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
                         settings: cont.CycleSettings | None = None, *, progress: bool = False,
                         callback: Callable[[int, Any], Any] | None = None,
@@ -157,9 +165,11 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     settings = dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
                                    direction=direction)
     meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast
+    problem = gfb_cycle_problem(params)
+    _check_size(problem, settings)
     x_of_t, T, _ = linear_response_start(params, omega_start)
     start = cont.start_from_function(x_of_t, T, omega_start, settings)
-    branch = cont.continue_cycles(gfb_cycle_problem(params), settings, start, progress=progress, callback=callback)
+    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback)
     return describe_branch(branch, meta)
 
 
@@ -176,9 +186,10 @@ def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int
     settings = settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=80)
     meta = branch_meta(params, "self_excited", spec)
     hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
+    problem = gfb_self_excited_problem(params)
+    _check_size(problem, settings)
     start = cont.start_from_hopf(hp, settings)
-    branch = cont.continue_cycles(gfb_self_excited_problem(params), settings, start, progress=progress,
-                                  callback=callback)
+    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback)
     return describe_branch(branch, meta)
 
 

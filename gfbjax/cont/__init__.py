@@ -28,6 +28,7 @@ from ._collocation import (Constraint as Constraint, Orbit as Orbit, Scheme as S
                            palc_constraint as palc_constraint, transfer_matrices as transfer_matrices,
                            uniform_mesh as uniform_mesh)
 from ._cycles import (CycleStart as CycleStart, analyse as analyse, bind_solver as bind_solver,
+                      check_cycle_inputs as check_cycle_inputs, check_cycle_size as check_cycle_size,
                       continue_cycles as continue_cycles, correct_cycle as correct_cycle,
                       start_from_branch as start_from_branch,
                       start_from_function as start_from_function, start_from_hopf as start_from_hopf,
@@ -53,7 +54,7 @@ from ._sparsity import (Coloring as Coloring, color_pattern as color_pattern, de
                         jacobian_values as jacobian_values)
 
 __all__ = [
-    "Arnoldi", "BatchNewtonResult", "Branch", "BranchFileError", "Coloring", "Constraint", "CycleProblem",
+    "Arnoldi", "BatchNewtonResult", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Coloring", "Constraint", "CycleProblem",
     "CycleSettings", "CycleStart",
     "DenseCondensation", "EquilibriumProblem", "EquilibriumSettings", "FloquetMethod", "HopfPoint",
     "LinearSolveError", "LinearSolver", "Linearisation", "Natural", "NewtonSettings", "NewtonSolution", "Orbit",

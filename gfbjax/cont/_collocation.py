@@ -66,7 +66,7 @@ carrying the two bordering rows along, followed by a dense (2n+2) solve for
 ``(x_0, x_N, T, lam)`` and back-substitution: O(N n^3) time, O(N n^2) memory.
 The per-interval transfer matrices :math:`\Gamma_j = -D_j^{-1}C_j` map
 :math:`\delta x_j \mapsto \delta x_{j+1}`; their product is the monodromy
-matrix (see ``floquet.py``).
+matrix (see ``_floquet.py``).
 """
 from __future__ import annotations
 

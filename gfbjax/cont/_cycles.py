@@ -25,7 +25,7 @@ from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
 
-__all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "bind_solver", "start_from_samples", "start_from_function",
+__all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "check_cycle_inputs", "check_cycle_size", "bind_solver", "start_from_samples", "start_from_function",
            "start_from_hopf", "start_from_branch", "start_from_pd"]
 
 
@@ -116,17 +116,10 @@ def _effective_floquet(problem: CycleProblem, settings: CycleSettings) -> Floque
     return settings.floquet or (Arnoldi() if isinstance(solver, SparseSweep) else PeriodicQR())
 
 
-def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleSettings) -> None:
-    """ValueError, before any work, when ``orbit`` does not fit ``problem`` (state count, f's output shape), when
-    the Floquet method cannot see past the trivial multipliers, or when the collocation system would not fit in
-    :data:`MEMORY_LIMIT`."""
-    n, N, m = problem.n, orbit.N, int(orbit.xi.shape[1]) + 1
-    if orbit.n != n:
-        raise ValueError(f"the start orbit has {orbit.n} states but problem.n = {n}")
-    out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((n,), orbit.xm.dtype), orbit.lam, problem.args)
-    if getattr(out, "shape", None) != (n,):
-        raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
-                         f"shape ({n},); it must return ({n},)")
+def check_cycle_size(problem: CycleProblem, N: int, m: int, settings: CycleSettings) -> None:
+    """ValueError, before any work, when the Floquet method cannot see past the trivial multipliers or when the
+    collocation system of N intervals of degree m would not fit in :data:`MEMORY_LIMIT`."""
+    n = problem.n
     floquet = _effective_floquet(problem, settings)
     from ._floquet import Arnoldi
     if isinstance(floquet, Arnoldi) and min(floquet.k, n - 2) <= problem.n_trivial:
@@ -144,6 +137,19 @@ def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleS
                          f"GiB for the collocation system (limit {MEMORY_LIMIT / 2**30:.0f} GiB); use fewer "
                          "intervals" + ("" if isinstance(solver, SparseSweep) else
                                         " or the sparse solver (a Jacobian pattern)"))
+
+
+def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleSettings) -> None:
+    """ValueError, before any work, when ``orbit`` does not fit ``problem`` (state count, f's output shape), and
+    the checks of :func:`check_cycle_size` for its mesh."""
+    n = problem.n
+    if orbit.n != n:
+        raise ValueError(f"the start orbit has {orbit.n} states but problem.n = {n}")
+    out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((n,), orbit.xm.dtype), orbit.lam, problem.args)
+    if getattr(out, "shape", None) != (n,):
+        raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
+                         f"shape ({n},); it must return ({n},)")
+    check_cycle_size(problem, orbit.N, int(orbit.xi.shape[1]) + 1, settings)
 
 
 def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,

@@ -2,7 +2,7 @@ r"""Floquet multipliers from the condensed collocation blocks.
 
 The monodromy matrix is the product of the per-interval transfer matrices
 :math:`M = \Gamma_{N-1}\cdots\Gamma_0`, :math:`\Gamma_j = -D_j^{-1}C_j` (see
-``collocation.py``).  Its eigenvalues are the Floquet multipliers; one of them
+``_collocation.py``).  Its eigenvalues are the Floquet multipliers; one of them
 is (up to discretisation error) the trivial multiplier +1 of the autonomous
 orbit.
 
@@ -226,10 +226,9 @@ class Arnoldi(FloquetMethod):
     tol: float = 1e-11
 
     def __post_init__(self) -> None:
-        if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 1:
-            raise ValueError(f"Arnoldi k (number of multipliers) must be an int >= 1, got {self.k!r}")
-        if not (isinstance(self.tol, float) and 0.0 < self.tol < 1.0):
-            raise ValueError(f"Arnoldi tol must be a float in (0, 1), got {self.tol!r}")
+        from ._problem import check_range
+        check_range("Arnoldi k (number of multipliers)", self.k, 1, 10**6, integer=True)
+        check_range("Arnoldi tol", self.tol, 0.0, 1.0, lo_open=True, hi_open=True)
 
     def multipliers(self, lin, memo: dict) -> np.ndarray:
         import scipy.sparse.linalg as spla

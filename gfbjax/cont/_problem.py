@@ -9,6 +9,7 @@ whole continuation to avoid re-compilation.
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
@@ -16,13 +17,19 @@ import jax
 import numpy as np
 
 
-def _check_common(f: Any, n: Any, record: Sequence[int] | None) -> None:
+def _is_int(v: Any) -> bool:
+    return isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_))
+
+
+def _check_common(problem: Any) -> None:
+    f, n, record = problem.f, problem.n, problem.record
     if not callable(f):
         raise ValueError(f"f must be callable f(x, lam, args), got {type(f).__name__}")
-    if not (isinstance(n, int) and n >= 1):
+    if not (_is_int(n) and n >= 1):
         raise ValueError(f"n (state dimension) must be an int >= 1, got {n!r}")
+    object.__setattr__(problem, "n", int(n))  # numpy integers are welcome; store a Python int
     if record is not None:
-        bad = [c for c in record if not (isinstance(c, int) and 0 <= c < n)]
+        bad = [c for c in record if not (_is_int(c) and 0 <= c < n)]
         if bad:
             raise ValueError(f"record must hold component indices in [0, {n}), got {bad}")
 
@@ -36,7 +43,7 @@ class CycleProblem:
     autonomous forcing oscillators).  record: state components whose max/min
     over the cycle are stored (None: all).  jac_sparsity: optional boolean
     (n, n) pattern of df/dx (True where an entry may be non-zero); with it,
-    large problems use the sparse linear algebra of ``sparse_colloc``.
+    large problems can use the sparse linear solver (``SparseSweep``).
     """
 
     f: Callable[[jax.Array, jax.Array, Any], jax.Array]
@@ -47,7 +54,7 @@ class CycleProblem:
     jac_sparsity: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        _check_common(self.f, self.n, self.record)
+        _check_common(self)
         if not (isinstance(self.n_trivial, int) and 1 <= self.n_trivial <= self.n):
             raise ValueError(f"n_trivial must be an int in [1, n={self.n}], got {self.n_trivial!r}")
         if self.jac_sparsity is not None and np.shape(self.jac_sparsity) != (self.n, self.n):
@@ -69,7 +76,7 @@ class EquilibriumProblem:
     record: Sequence[int] | None = None
 
     def __post_init__(self) -> None:
-        _check_common(self.f, self.n, self.record)
+        _check_common(self)
 
     @property
     def components(self) -> list[int]:
@@ -78,10 +85,10 @@ class EquilibriumProblem:
 
 def check_range(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = False,
                 hi_open: bool = False, integer: bool = False) -> None:
-    """Raise ``ValueError`` naming the field unless lo <= value <= hi (open ends optional)."""
-    ok_type = isinstance(value, int) if integer else isinstance(value, (int, float))
-    if isinstance(value, bool):
-        ok_type = False
+    """Raise ``ValueError`` naming the field unless lo <= value <= hi (open ends optional).  Python and NumPy
+    numbers are accepted (booleans are not); ``integer`` also refuses 16.0."""
+    ok_type = isinstance(value, numbers.Integral if integer else numbers.Real) and not isinstance(
+        value, (bool, np.bool_))
     ok = ok_type and (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
     if not ok:
         rng = f"{'(' if lo_open else '['}{lo}, {hi}{')' if hi_open else ']'}"

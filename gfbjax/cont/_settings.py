@@ -10,6 +10,7 @@ same way; ``None`` means the automatic choice.
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from typing import Any
 
@@ -46,7 +47,10 @@ class PseudoArclength:
 @dataclass(frozen=True)
 class Natural:
     """Natural-parameter continuation: lam = lam_k + ds * direction, predictor by secant extrapolation of the last
-    two points (the last point for the first step).  Fails at folds; the tangent is not used."""
+    two points (the last point for the first step).  Fails at folds; the tangent is not used, so events are
+    detected but not localised (they are reported at the first point past them, ``located=False``), and a branch
+    cannot start from a bifurcation point (Hopf, PD) with it.  For checks and quick sweeps; use
+    :class:`PseudoArclength` for results."""
 
     def predict(self, space: Any, X: Any, X_prev: Any, tau: Any, ds: float, direction: int, dlam_max: float):
         ds = min(ds, dlam_max)
@@ -78,17 +82,15 @@ class _StepSettings:
 
     def _check_steps(self) -> None:
         check_range("ds", self.ds, 0.0, float("inf"), lo_open=True, hi_open=True)
-        if not (isinstance(self.ds_min, (int, float)) and 0.0 < self.ds_min <= self.ds):
-            raise ValueError(f"ds_min must be in (0, ds={self.ds}], got {self.ds_min!r}")
-        if not (isinstance(self.ds_max, (int, float)) and self.ds <= self.ds_max < float("inf")):
-            raise ValueError(f"ds_max must be in [ds={self.ds}, inf), got {self.ds_max!r}")
-        if self.direction not in (1, -1):
+        check_range("ds_min", self.ds_min, 0.0, self.ds, lo_open=True)
+        check_range("ds_max", self.ds_max, self.ds, float("inf"), hi_open=True)
+        if isinstance(self.direction, (bool, np.bool_)) or self.direction not in (1, -1):
             raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
         check_range("max_points", self.max_points, 1, 10**7, integer=True)
-        if not (isinstance(self.lam_min, (int, float)) and isinstance(self.lam_max, (int, float))
+        if not (isinstance(self.lam_min, numbers.Real) and isinstance(self.lam_max, numbers.Real)
                 and self.lam_min < self.lam_max):
             raise ValueError(f"lam_min must be < lam_max, got lam_min={self.lam_min!r}, lam_max={self.lam_max!r}")
-        if not (isinstance(self.dlam_max, (int, float)) and self.dlam_max > 0.0):
+        if not (isinstance(self.dlam_max, numbers.Real) and self.dlam_max > 0.0):
             raise ValueError(f"dlam_max must be in (0, inf], got {self.dlam_max!r}")
         check_range("newton_tol", self.newton_tol, 0.0, 1.0, lo_open=True)
         check_range("newton_max_iter", self.newton_max_iter, 1, 1000, integer=True)

@@ -103,7 +103,12 @@ class FoilDesign:
                                            newton_step_tol=newton_tol, newton_max_iter=newton_max_iter)
         self.params, self.omega = params, float(omega)
         self.scheme = cont.Scheme(m)
-        cont.bind_solver(gfb_cycle_problem(params), self.scheme, self.settings)  # a bad solver fails here
+        problem = gfb_cycle_problem(params)
+        cont.bind_solver(problem, self.scheme, self.settings)  # a bad solver fails here
+        try:
+            cont.check_cycle_size(problem, N, m, self.settings)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
         self.gradient_mode = "adjoint" if gradient_mode == "auto" else gradient_mode
         if orbit is None:
             x_of_t, T, _ = linear_response_start(params, self.omega)
