@@ -139,7 +139,7 @@ class StaticResult:
 
     @property
     def converged(self) -> bool:
-        return self.outcome is Outcome.CONVERGED
+        return self.outcome == Outcome.CONVERGED
 
     @property
     def critical_eigenvalue(self) -> complex:

@@ -213,7 +213,7 @@ class TransientResult:
 
     @property
     def completed(self) -> bool:
-        return self.outcome is Outcome.COMPLETED
+        return self.outcome == Outcome.COMPLETED
 
     def poincare(self, last: int | None = None) -> np.ndarray:
         """Once-per-revolution samples (unbalance phase = 0 mod 2 pi) of a constant-speed run: indices
