@@ -13,9 +13,8 @@ to gravity (paper Fig. 4).  In the equations of motion it enters as ``w_ext = W 
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import equinox as eqx

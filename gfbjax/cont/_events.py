@@ -114,7 +114,7 @@ def double_orbit_pd(f: Any, args: Any, orbit: col.Orbit, scheme: col.Scheme,
     [T, 2T] so that it is 2T-periodic; T and lam components zero.
     """
     G = np.asarray(G)
-    N, n = G.shape[0], G.shape[1]
+    n = G.shape[1]
     M = np.eye(n)
     for g in G:
         M = g @ M

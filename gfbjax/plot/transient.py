@@ -10,7 +10,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..analyses.signals import Spectrogram, poincare_section, spectrum
+from ..analyses.signals import Spectrogram, spectrum
 from ._common import axes_grid, finish
 
 __all__ = ["plot_runup", "plot_spectrogram", "plot_orbit_poincare_fft"]

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from gfbjax.cont import Outcome, CycleProblem, DenseCondensation, CycleSettings, continue_cycles, start_from_pd, start_from_samples
+from gfbjax.cont import Outcome, CycleProblem, CycleSettings, continue_cycles, start_from_pd, start_from_samples
 from cont_systems import forced_duffing
 
 D, W = 0.3, 1.2

@@ -83,8 +83,6 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
     import gfbjax
 
     from ...analyses.signals import runup_stft, subsynchronous
