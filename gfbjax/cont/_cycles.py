@@ -223,7 +223,7 @@ class CycleCurve(Curve):
     def correct(self, pred, con):
         return self.solver.correct(pred, con, self.settings.newton)
 
-    def analyse(self, X, lin):
+    def analyse(self, X, lin, tangent):
         return analyse(self.problem, lin, self.floquet, self.memo)
 
     def tests(self, analysis, tangent_lam):

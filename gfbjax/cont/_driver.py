@@ -69,8 +69,9 @@ class Curve(abc.ABC):
         """(NewtonSolution with ``aux`` = the unit tangent, a linearisation for :meth:`analyse`)."""
 
     @abc.abstractmethod
-    def analyse(self, X: Any, lin: Any) -> dict[str, Any]:
-        """``spectrum`` (multipliers or eigenvalues, sorted), ``stable``, ``trivial_error`` of a converged point."""
+    def analyse(self, X: Any, lin: Any, tangent: Any) -> dict[str, Any]:
+        """``spectrum`` (multipliers or eigenvalues, sorted), ``stable``, ``trivial_error`` (and whatever the test
+        functions need) of a converged point with its unit tangent."""
 
     @abc.abstractmethod
     def tests(self, analysis: dict[str, Any], tangent_lam: float) -> dict[str, float]: ...
@@ -217,7 +218,7 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
                 return Outcome.START_FAILED, f"start point did not converge, not even along its null tangent " \
                                              f"({sol.outcome})"
             X, tau = sol.x, c.scale(sol.aux, float(s.direction))
-        an = c.analyse(X, lin)
+        an = c.analyse(X, lin, tau)
         tests = c.tests(an, run.tangent_lam(tau))
         if not run.add_point(c.record(X, an, int(sol.iterations), 0.0, run.tangent_lam(tau))):
             return Outcome.STOPPED, "stopped by the callback"
@@ -245,7 +246,7 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
                                              f"{s.lam_max:g}]; the point on the bound did not converge")
             sol, lin, tau_n = placed
             Xn = sol.x
-        an_n = c.analyse(Xn, lin)
+        an_n = c.analyse(Xn, lin, tau_n)
         tests_n = c.tests(an_n, run.tangent_lam(tau_n))
         if tests is not None and s.detect:
             for kind in c.events(tests, tests_n, s.detect):
@@ -298,7 +299,7 @@ def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
             sol, lin = c.correct(pred, c.palc_constraint(X, tau, sv, pred))
             if not sol.converged:
                 return float("nan"), None
-            a = c.analyse(sol.x, lin)
+            a = c.analyse(sol.x, lin, sol.aux)
             tl = float(c.lam(sol.aux))
             return c.tests(a, tl)[kind], (sol, a, tl)
 

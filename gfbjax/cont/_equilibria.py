@@ -9,6 +9,10 @@ bordered system :math:`f(x,\lambda) = 0,\ \langle y - y_k, v\rangle - \Delta s =
 Eigenvalues of :math:`f_x` are computed at every point.  Test functions:
 
 * fold (limit point): the lam-component of the tangent changes sign;
+* branch point (BP): :math:`\operatorname{sign}\det A\ \sigma_{min}(A)` with :math:`A = [f_x\ f_\lambda;\
+  \tau^T]`, regular along the branch and at folds, singular where two branches cross; a fold in the same step
+  (a side branch turning at the branch point it leaves) is reported as the BP it is.  On such a side branch the
+  localisation can land on the crossing branch, so the BP may come out bracketed rather than located;
 * Andronov-Hopf: :math:`\psi_H`, the sign of :math:`\prod_{i<j} (\mu_i + \mu_j)/(|\mu_i| + |\mu_j|)` over all
   eigenvalue pairs (the bialternate product of :math:`f_x`) times its two smallest factors
   (:func:`._events.signed_min`): continuous, and of changing sign whenever any pair crosses the imaginary axis,
@@ -136,16 +140,25 @@ class EquilibriumCurve(Curve):
         v = np.linalg.svd(J)[2][-1]  # right singular vector of the smallest singular value of [f_x f_lam]
         return v * np.sign(v[np.argmax(np.abs(v))])
 
-    def analyse(self, y, lin):
-        ev, _ = _eig(self.problem, y)
-        return {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan")}
+    def analyse(self, y, lin, tangent):
+        J = np.asarray(_augmented_jacobian(self.problem.f, self.problem.args, jnp.asarray(y, float)))
+        ev = np.linalg.eigvals(J[:, :-1])
+        ev = ev[np.argsort(-ev.real, kind="stable")]
+        A = np.vstack([J, np.asarray(tangent, float)[None, :]])
+        # the augmented Jacobian [f_x f_lam; tau^T] is regular at folds and singular at branch points: its
+        # determinant's sign times its smallest singular value is continuous and changes sign there
+        bp = float(np.linalg.slogdet(A)[0] * np.linalg.svd(A, compute_uv=False)[-1])
+        return {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan"), "bp": bp}
 
     def tests(self, an, tangent_lam):
-        return {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0])}
+        return {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"]}
 
     def events(self, prev, cur, kinds):
-        return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
-                and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+        found = [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
+                 and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+        if "BP" in found and "FOLD" in found:  # a side branch turns at the branch point it leaves: one event
+            found.remove("FOLD")
+        return found
 
     def record(self, y, an, iterations, ds, tangent_lam) -> PointRecord:
         x = np.asarray(y[:-1])
@@ -158,6 +171,8 @@ class EquilibriumCurve(Curve):
         return {"x": np.asarray(y[:-1]).copy(), "lam": np.asarray(y[-1])}
 
     def special(self, kind, y, an, located=True):
+        if kind == "FOLD" and abs(an["bp"]) <= 1e-6:
+            return None  # the lam-component of the tangent also vanishes at a branch point: reported as BP
         if kind != "HOPF":
             return {}
         ev = an["spectrum"]

@@ -171,21 +171,21 @@ class EquilibriumSettings(_StepSettings):
     ``lam_min``, ``lam_max``, ``dlam_max``, ``fast_iter``, ``grow``, ``algorithm``).
     Corrector: ``newton_tol`` (a step is small when |dy| <= tol (1 + max|y|); the residual is then accepted below
     max(1e3 tol, 1e-9)), ``newton_max_iter``.
-    Events: ``detect`` any of ("FOLD", "HOPF"); ``locate``, ``locate_tol`` as for cycles.
+    Events: ``detect`` any of ("FOLD", "HOPF", "BP"); ``locate``, ``locate_tol`` as for cycles.
     """
 
     ds_min: float = 1e-8
     max_points: int = 200
     newton_tol: float = 1e-11
     newton_max_iter: int = 10
-    detect: tuple[str, ...] = ("FOLD", "HOPF")
+    detect: tuple[str, ...] = ("FOLD", "HOPF", "BP")
     locate_tol: float = 1e-10
 
     def __post_init__(self) -> None:
         self._check_steps()
-        bad = [d for d in self.detect if d not in ("FOLD", "HOPF")]
+        bad = [d for d in self.detect if d not in ("FOLD", "HOPF", "BP")]
         if bad or isinstance(self.detect, str):
-            raise ValueError(f"detect entries must be in ('FOLD', 'HOPF'), got {self.detect!r}")
+            raise ValueError(f"detect entries must be in ('FOLD', 'HOPF', 'BP'), got {self.detect!r}")
 
     @property
     def newton(self) -> NewtonSettings:

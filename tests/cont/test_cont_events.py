@@ -148,3 +148,30 @@ def test_start_exactly_at_a_fold_gives_both_halves():
         np.testing.assert_allclose(x ** 2, br.lam, atol=1e-10)
         halves[d] = x
     assert np.all(halves[1][1:] > 0) and np.all(halves[-1][1:] < 0)
+
+
+def _pitchfork(x, lam, a):
+    return -x ** 3 - lam * x
+
+
+def test_branch_point_on_the_trivial_branch():
+    """x' = -x^3 - p x along x = 0: a branch point at p = 0 (the stability changes there), located; no fold."""
+    br = continue_equilibria(EquilibriumProblem(_pitchfork, 1), EquilibriumSettings(ds=0.1, lam_min=-1.0,
+                             lam_max=1.0), [0.0], -1.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert [s.type for s in br.special] == ["BP"], br.special
+    assert br.special[0].located and abs(br.special[0].lam) < 1e-9
+
+
+def test_branch_point_on_the_side_branch_is_no_fold():
+    """Along x = sqrt(-p) from p = -1 the curve p = -x^2 turns at (0, 0), which is the branch point: reported as
+    BP, not as a fold; the branch goes on along x = -sqrt(-p).  (Near the crossing the localisation's corrections
+    can land on x = 0, so the BP is allowed to be bracketed rather than located; its place is checked.)"""
+    br = continue_equilibria(EquilibriumProblem(_pitchfork, 1), EquilibriumSettings(ds=0.1, ds_max=0.1,
+                             max_points=40, lam_min=-1.0, lam_max=1.0), [1.0], -1.0)
+    types = [s.type for s in br.special]
+    assert types == ["BP"], br.special
+    assert abs(br.special[0].lam) < 1e-4
+    x = br.states["x"][:, 0]
+    np.testing.assert_allclose(x ** 2, -br.lam, atol=1e-9)
+    assert x[0] > 0 and x[-1] < 0
