@@ -91,7 +91,10 @@ class SpecialPoint:
     located: the test function was driven to zero by the localisation solver; residual: its value at the returned
     point.  Not located with a finite residual: the sign change was bracketed to the step tolerance but the test
     function jumps there (its value is the residual): the location is good, the type-specific data less so.  Not
-    located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.  angle: NS, the argument of
+    located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.
+    A bracketed BP deserves suspicion: the branch-point test also flips when the corrector jumps from one branch
+    to a nearby one (an imperfect bifurcation with a large step), and then the points past it lie on the other
+    branch; rerun with a smaller ``ds_max``.  angle: NS, the argument of
     the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the critical eigenvalue (per unit
     time of the problem).  state: index into ``Branch.special_states`` (the full state at the point).
     normal_form: normal-form data where computed (e.g. ``{"l1": first Lyapunov coefficient}``).
