@@ -119,10 +119,6 @@ class LinearSolver(abc.ABC):
 
 
 # ---------------------------------------------------------------- dense condensation
-def _zero_mesh(o: col.Orbit) -> col.Orbit:
-    return col.Orbit(jnp.zeros_like(o.mesh), o.xm, o.xi, o.T, o.lam)
-
-
 def _mesh_scale(o: col.Orbit) -> jax.Array:
     return jnp.max(jnp.abs(o.xm))
 
@@ -137,10 +133,9 @@ def dense_linearise_step(f, args, orbit: col.Orbit, con: col.Constraint, scheme:
 
 def dense_correct(f, args, orbit: col.Orbit, con: col.Constraint, scheme: col.Scheme,
                   newton: NewtonSettings) -> NewtonSolution:
-    """The dense Newton correction as pure JAX (jit it, or ``jax.vmap`` it over ``args``)."""
-    sol = newton_solve(lambda o: dense_linearise_step(f, args, o, con, scheme), orbit, newton, scale=_mesh_scale)
-    # the mesh is data, not an unknown: keep the caller's
-    return sol
+    """The dense Newton correction as pure JAX (jit it, or ``jax.vmap`` it over ``args``).  The step has a zero
+    mesh component (the mesh is data, not an unknown), and the step test is relative to the mesh values."""
+    return newton_solve(lambda o: dense_linearise_step(f, args, o, con, scheme), orbit, newton, scale=_mesh_scale)
 
 
 _dense_correct = jax.jit(dense_correct, static_argnums=(0, 4, 5))
