@@ -24,6 +24,7 @@ jax.config.update("jax_enable_x64", True)
 from . import limits  # noqa: E402
 from .limits import NoSolutionError  # noqa: E402
 from .params import (  # noqa: E402
+    PRESETS,
     VARIATIONS,
     ParameterError,
     Params,
@@ -40,6 +41,7 @@ from .params import (  # noqa: E402
 __all__ = [
     "limits",
     "NoSolutionError",
+    "PRESETS",
     "VARIATIONS",
     "ParameterError",
     "Params",

@@ -34,9 +34,16 @@ from __future__ import annotations
 
 import os
 import sys
+import tempfile
 import warnings
 
-__all__ = ["configure_process", "process_defaults", "jax_backend_initialized"]
+__all__ = [
+    "configure_process",
+    "process_defaults",
+    "jax_backend_initialized",
+    "compilation_cache_dir",
+    "enable_compilation_cache",
+]
 
 _SCHEDULER_FLAG = "xla_cpu_enable_concurrency_optimized_scheduler"
 _warned: set[str] = set()
@@ -119,3 +126,51 @@ def _warn(names: list[str], why: str) -> None:
     setting = ", ".join(f"{n}={values[n]}" for n in names)
     warnings.warn(f"gfbjax could not apply {setting}: {why}.  Import gfbjax before running any JAX computation, or "
                   f"set these variables before starting Python (see gfbjax._process).", RuntimeWarning, stacklevel=3)
+
+
+CACHE_ENV = "GFBJAX_CACHE_DIR"
+
+
+def compilation_cache_dir() -> str | None:
+    """The folder of JAX's persistent compilation cache that gfbjax programs use, or None when it is switched off.
+
+    ``$GFBJAX_CACHE_DIR`` when set (the values ``""``, ``0``, ``off`` and ``none`` switch the cache off), else
+    ``$XDG_CACHE_HOME/gfbjax/jax`` (``~/.cache/gfbjax/jax`` by default).
+    """
+    value = os.environ.get(CACHE_ENV)
+    if value is not None:
+        return None if value.strip().lower() in ("", "0", "off", "none", "false") else os.path.expanduser(value)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "gfbjax", "jax")
+
+
+def enable_compilation_cache(path: str | None = None) -> str | None:
+    """Turn on JAX's persistent compilation cache in ``path`` (default :func:`compilation_cache_dir`).
+
+    Why: a continuation compiles a handful of large kernels (the collocation Newton step, the Floquet sweeps) that
+    take 30-60 s on a small machine, the same for every run with the same grid; with the cache a second run loads
+    them in a few seconds.  Every kernel is cached, however quick its compilation (JAX's default keeps only those
+    above one second).  The CLI, :mod:`gfbjax.sweep` and its Dask workers call this; a library user may too.
+    The cache is keyed by the program, shapes, jax version and device, so a stale entry is never used.
+
+    Returns:
+        The folder in use, or None when the cache is switched off (``GFBJAX_CACHE_DIR=off``) or cannot be created
+        (then a :class:`RuntimeWarning` says why and everything still runs, only compiling again).
+    """
+    folder = compilation_cache_dir() if path is None else os.path.expanduser(path)
+    if folder is None:
+        return None
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # an existing folder may still refuse writes
+            pass
+    except OSError as exc:
+        warnings.warn(f"gfbjax: compilation cache disabled, cannot write to {folder!r} ({exc}); set "
+                      f"{CACHE_ENV} to a writable folder, or to 'off'", RuntimeWarning, stacklevel=2)
+        return None
+    import jax
+
+    jax.config.update("jax_compilation_cache_dir", folder)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    return folder

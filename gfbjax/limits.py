@@ -39,7 +39,7 @@ __all__ = [
     "ETA", "BALANCE_GRADE", "OMEGA_R", "E_U", "THETA0", "LOAD", "GUMBEL_WIDTH", "LOAD_PER_BEARING", "POSITIVE",
     "POISSON",
     # dimensionless groups of Params
-    "KAPPA", "ZETA", "SIGMA", "EPS", "W_EXT", "MASS_RATIO",
+    "KAPPA", "ZETA", "SIGMA", "EPS", "W_EXT", "MASS_RATIO", "STRUCTURAL_DAMPING",
     # foil design
     "DESIGN_ALPHA_F", "DESIGN_ETA",
 ]
@@ -270,8 +270,8 @@ ALPHA_F = Range("alpha_f", 0.0, 100.0, lo_open=True, what="bump-foil compliance"
 ETA = Range("eta", 0.0, 100.0, lo_open=True, what="foil loss factor")
 BALANCE_GRADE = Range("G", 0.0, 100.0, unit="mm/s", what="ISO 1940 balance grade")
 OMEGA_R = Range("omega_r", 0.0, None, lo_open=True, unit="rad/s")
-#: Unbalance eccentricity; its upper bound is the clearance c.
-E_U = Range("e_u", 0.0, None, unit="m", what="at most the clearance c")
+#: Unbalance eccentricity (the disc's mass eccentricity: not bounded by the clearance; SystemSpec warns above c).
+E_U = Range("e_u", 0.0, None, unit="m")
 THETA0 = Range("theta0", -2 * math.pi, 2 * math.pi, unit="rad")
 LOAD = Range("load", 0.0, None, unit="N")
 GUMBEL_WIDTH = Range("gumbel_width", 0.0, 0.1)
@@ -285,8 +285,10 @@ POISSON = Range("nu", 0.0, 0.5, hi_open=True, what="Poisson's ratio")
 KAPPA = Range("kappa", 0.0, None, lo_open=True, what="R/L")
 ZETA = Range("zeta", 0.0, None, lo_open=True, what="p0 R L t*^2 / (m_j c)")
 SIGMA = Range("sigma", 0.0, None, what="g t*^2 / c")
-EPS = Range("eps", 0.0, 1.0, what="unbalance eccentricity over the clearance")
+EPS = Range("eps", 0.0, None, what="disc unbalance acceleration over c Omega^2")
 W_EXT = Range("w_ext", 0.0, None, what="extra load over p0 R L")
+STRUCTURAL_DAMPING = Range("structural_damping", 0.0, 1.0,
+                           what="1: c_f = eta k_f / Omega_bar, 0: c_f = eta k_f (SystemSpec.foil_damping)")
 MASS_RATIO = Range("mass_ratio", 0.0, None, lo_open=True, what="m_d / (2 m_j), Jeffcott rotor")
 
 # -- foil design (gfbjax.design) --------------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 
 Everything a user types is SI (or a dimensionless design value that the paper itself quotes, such as
 ``alpha_f`` or ``k_s_bar``).  :func:`SystemSpec.nondim` turns it into :class:`Params`, the equinox PyTree
-that every solver in gfbjax consumes.  Conventions follow ``DESIGN.md`` (corrected Eq. 14 of the paper):
+that every solver in gfbjax consumes.  Conventions follow docs/model.md (corrected Eq. 14 of the paper):
 
 * time scale ``t* = 6 mu R^2 / (p0 c^2)`` [s]; dimensionless time ``tau = t / t*``;
 * speed ``Omega_bar = Omega t*`` — identical to the bearing number ``Lambda = 6 mu Omega R^2 / (p0 c^2)``;
@@ -14,6 +14,18 @@ that every solver in gfbjax consumes.  Conventions follow ``DESIGN.md`` (correct
 * ``eta`` structural loss factor of the foil, ``c_f_bar = eta k_f_bar / Omega_bar``;
 * ``kappa = R / L``; ``eps = e_u / c`` unbalance eccentricity, with ``e_u = G / Omega_r`` (ISO 1940, G in mm/s,
   ``Omega_r = 2500 rad/s`` by default) unless ``e_u`` is given.
+
+Three of these readings of the paper are switches of :class:`SystemSpec`, recorded with every result
+(``SystemSpec.to_dict``); :data:`PRESETS` names the two consistent sets, ``"corrected"`` (the defaults) and
+``"paper"`` (the paper read literally); docs/model.md explains each one:
+
+* ``foil_damping``: ``"structural"`` (``c_f_bar = eta k_f_bar / Omega_bar``) or ``"paper"``
+  (``c_f_bar = eta k_f_bar``, Eq. 10 as printed);
+* ``unbalance_mass``: ``"disc"`` (Eq. 15a: the disc's acceleration amplitude is ``e_u Omega^2``) or ``"rotor"``
+  (the unbalance ``u = (m_d + 2 m_j) e_u`` of the whole rotor is carried by the disc: ``eps`` grows by
+  ``(m_d + 2 m_j) / m_d``);
+* ``omega_r_unit``: the unit of ``omega_r`` in ``e_u = G / omega_r``: ``"rad/s"`` or ``"rpm"`` (the paper's worked
+  example of Eq. 16: G6.3 at 2500 rpm gives 24.1 um).
 """
 
 from __future__ import annotations
@@ -21,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,9 +58,36 @@ __all__ = [
     "system_from_name_or_file",
     "bump_foil_compliance",
     "unbalance_eccentricity",
+    "FOIL_DAMPING",
+    "UNBALANCE_MASS",
+    "OMEGA_R_UNITS",
+    "PRESETS",
 ]
 
 ROTORS = ("jeffcott", "rigid")
+#: Foil damping conventions: ``c_f_bar = eta k_f_bar / Omega_bar`` (structural loss factor) or ``eta k_f_bar``.
+FOIL_DAMPING = ("structural", "paper")
+#: Unbalance conventions: ``eps = e_u / c`` on the disc (Eq. 15a) or ``u = (m_d + 2 m_j) e_u`` carried by the disc.
+UNBALANCE_MASS = ("disc", "rotor")
+#: Units of ``omega_r`` in ``e_u = G / omega_r`` (Eq. 16).
+OMEGA_R_UNITS = ("rad/s", "rpm")
+#: Named sets of the three convention switches: the project's corrected reading (the defaults) and the paper's
+#: literal one.  ``SystemSpec.with_preset(name)`` applies one.
+PRESETS: dict[str, dict[str, str]] = {
+    "corrected": {"foil_damping": "structural", "unbalance_mass": "disc", "omega_r_unit": "rad/s"},
+    "paper": {"foil_damping": "paper", "unbalance_mass": "rotor", "omega_r_unit": "rpm"},
+}
+
+
+def _check_choice(name: str, value: Any, allowed: tuple[str, ...]) -> None:
+    if not isinstance(value, str) or value not in allowed:
+        raise ParameterError(f"{name} = {value!r} is not one of {allowed}")
+
+
+def _check_preset(preset: Any) -> dict[str, str]:
+    if not isinstance(preset, str) or preset not in PRESETS:
+        raise ParameterError(f"preset = {preset!r} is not one of {tuple(PRESETS)}")
+    return PRESETS[preset]
 
 
 def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, p0: float, c: float) -> float:
@@ -57,8 +97,8 @@ def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, 
 
     Args:
         l0: half length of one bump [m].
-        t_b: foil thickness [m].
-        s0: bump pitch [m].
+        t_b: foil thickness [m], below ``l0``.
+        s0: bump pitch [m], at least ``2 l0``.
         E: Young's modulus of the foil [Pa].
         nu: Poisson's ratio [-], in [0, 0.5).
         p0: ambient pressure [Pa].
@@ -67,22 +107,35 @@ def bump_foil_compliance(l0: float, t_b: float, s0: float, E: float, nu: float, 
     for name, v in (("l0", l0), ("t_b", t_b), ("s0", s0), ("E", E), ("p0", p0), ("c", c)):
         limits.POSITIVE.check(v, name)
     limits.POISSON.check(nu)
+    # the formula is that of a thin curved beam: a foil thicker than the bump, or bumps that overlap, are no
+    # bump foil, and the number it would give means nothing
+    if not t_b < l0:
+        raise ParameterError(f"t_b = {t_b:g} m is outside the allowed range (0, l0 = {l0:g} m): the foil must be "
+                             "thinner than the bump half length")
+    if not s0 >= 2.0 * l0:
+        raise ParameterError(f"s0 = {s0:g} m is outside the allowed range [2 l0 = {2.0 * l0:g} m, inf): bumps do "
+                             "not overlap")
     return 2.0 * p0 * (l0 / t_b) ** 3 * (1.0 - nu**2) * s0 / (c * E)
 
 
-def unbalance_eccentricity(G: float, omega_r: float = 2500.0) -> float:
+def unbalance_eccentricity(G: float, omega_r: float = 2500.0, unit: str = "rad/s") -> float:
     """Unbalance eccentricity ``e_u = G / Omega_r`` [m] for ISO 1940 grade ``G`` [mm/s] at service speed
-    ``omega_r`` [rad/s] (paper Eq. 16 in consistent units: G2.5 at 2500 rad/s gives 1.0 um)."""
+    ``omega_r`` (paper Eq. 16).
+
+    ``unit`` is the unit of ``omega_r``: ``"rad/s"`` (consistent units: G2.5 at 2500 rad/s gives 1.0 um) or
+    ``"rpm"`` (the paper's worked example: G2.5 at 2500 rpm = 261.8 rad/s gives 9.55 um, G6.3 24.1 um)."""
     G = limits.BALANCE_GRADE.check(G)
     omega_r = limits.OMEGA_R.check(omega_r)
-    return G * 1e-3 / omega_r
+    _check_choice("omega_r_unit", unit, OMEGA_R_UNITS)
+    rad_s = omega_r * 2.0 * math.pi / 60.0 if unit == "rpm" else omega_r
+    return G * 1e-3 / rad_s
 
 
 @dataclass(frozen=True)
 class SystemSpec:
     """A flexible (Jeffcott) or rigid rotor on two identical gas foil bearings, in SI units.
 
-    The defaults are the project's reference system (DESIGN.md): ``R = 19.05 mm``, ``L/D = 1``,
+    The defaults are the project's reference system (docs/model.md): ``R = 19.05 mm``, ``L/D = 1``,
     ``R/c = 500``, air at 20 C, ``k_s_bar = 1``, ``alpha_f = 0.1``, ``eta = 0.05``, unbalance G6.3.
 
     Attributes:
@@ -98,8 +151,9 @@ class SystemSpec:
         alpha_f: dimensionless bump-foil compliance per area [-]; see :func:`bump_foil_compliance`.
         eta: structural loss factor of the bump foil [-].
         G: ISO 1940 balance grade [mm/s]; ignored when ``e_u`` is given.  0 is a balanced rotor.
-        e_u: unbalance eccentricity [m]; overrides ``G``.
-        omega_r: service speed that defines ``e_u`` from ``G`` [rad/s].
+        e_u: unbalance eccentricity [m]; overrides ``G``.  It is the mass eccentricity of the disc, not bounded by
+            the clearance: a value above ``c`` is accepted with a warning.
+        omega_r: service speed that defines ``e_u`` from ``G`` [rad/s, or rpm with ``omega_r_unit="rpm"``].
         rotor: ``"jeffcott"`` (4 DoF: journals + disc, Eq. 12) or ``"rigid"`` (2 DoF journal).
         theta0: angle of the foil's fixed end [rad], from the horizontal x axis towards the vertical y axis
             (y points up; the rotor spins from x towards y).  Default pi/2: the foil is clamped at the top.
@@ -109,6 +163,15 @@ class SystemSpec:
             ``(Nx - 1)(Nz + 1)`` film and foil states plus the rotor's; at most
             :data:`gfbjax.limits.MAX_DENSE_UNKNOWNS` (6144) in all, because every analysis builds dense Jacobians.
         gumbel_width: width of the smoothed ``max(p - 1, 0)`` of the Gumbel condition [-]; 0 = exact max.
+        foil_damping: ``"structural"`` (default: ``c_f_bar = eta k_f_bar / Omega_bar``, a loss factor at
+            synchronous motion) or ``"paper"`` (``c_f_bar = eta k_f_bar``, Eq. 10 as printed).
+        unbalance_mass: ``"disc"`` (default, Eq. 15a: ``eps = e_u / c`` is the disc's unbalance) or ``"rotor"``
+            (the paper's text: the unbalance ``u = (m_d + 2 m_j) e_u`` of the whole rotor sits on the disc, so the
+            disc's forcing is ``(m_d + 2 m_j) / m_d`` times larger; the rigid rotor has no disc and is unaffected).
+        omega_r_unit: unit of ``omega_r``: ``"rad/s"`` (default) or ``"rpm"`` (the paper's worked example).
+
+    :data:`PRESETS` names two sets of the last three fields: ``"corrected"`` (the defaults) and ``"paper"``;
+    :meth:`with_preset` applies one, :attr:`preset` says which one a spec follows.
 
     Every field is checked on construction against its range in :mod:`gfbjax.limits` (ParameterError naming the
     field, the value and the range); NumPy numbers are accepted and stored as Python numbers.
@@ -134,6 +197,9 @@ class SystemSpec:
     Nx: int = 48
     Nz: int = 8
     gumbel_width: float = 0.0
+    foil_damping: str = "structural"
+    unbalance_mass: str = "disc"
+    omega_r_unit: str = "rad/s"
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # NumPy / 0-d JAX numbers -> Python numbers (JSON, static jit fields)
@@ -160,11 +226,19 @@ class SystemSpec:
             limits.K_S_BAR.check(self.k_s_bar)
         limits.ALPHA_F.check(self.alpha_f)
         limits.ETA.check(self.eta)
+        _check_choice("foil_damping", self.foil_damping, FOIL_DAMPING)
+        _check_choice("unbalance_mass", self.unbalance_mass, UNBALANCE_MASS)
+        _check_choice("omega_r_unit", self.omega_r_unit, OMEGA_R_UNITS)
         if self.e_u is None:
             limits.BALANCE_GRADE.check(self.G)
             limits.OMEGA_R.check(self.omega_r)
         else:
-            limits.E_U.with_bounds(hi=float(self.c)).check(self.e_u)
+            limits.E_U.check(self.e_u)
+        e_u = self.eccentricity_u
+        if e_u > float(self.c):  # the disc's mass eccentricity is not bounded by the bearing clearance
+            warnings.warn(f"unbalance eccentricity e_u = {e_u * 1e6:.4g} um exceeds the radial clearance "
+                          f"c = {float(self.c) * 1e6:.4g} um (allowed: it is the disc's mass eccentricity, but the "
+                          "journals may then touch the foil)", UserWarning, stacklevel=4)
         limits.THETA0.check(self.theta0)
         limits.LOAD.check(self.load)
         limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
@@ -178,8 +252,30 @@ class SystemSpec:
 
     @property
     def eccentricity_u(self) -> float:
-        """Unbalance eccentricity ``e_u`` [m]."""
-        return self.e_u if self.e_u is not None else unbalance_eccentricity(self.G, self.omega_r)
+        """Unbalance eccentricity ``e_u`` [m] (``e_u`` if given, else ``G / omega_r`` in ``omega_r_unit``)."""
+        if self.e_u is not None:
+            return self.e_u
+        return unbalance_eccentricity(self.G, self.omega_r, self.omega_r_unit)
+
+    @property
+    def unbalance_factor(self) -> float:
+        """Ratio of the disc's unbalance forcing to ``e_u Omega^2`` [-]: 1 with ``unbalance_mass="disc"``
+        (Eq. 15a) or for the rigid rotor, ``(m_d + 2 m_j) / m_d`` with ``unbalance_mass="rotor"``."""
+        if self.unbalance_mass == "rotor" and self.rotor == "jeffcott":
+            return (self.m_d + 2.0 * self.m_j) / self.m_d
+        return 1.0
+
+    @property
+    def preset(self) -> str:
+        """``"corrected"`` or ``"paper"`` when the three convention switches match that preset, else ``"mixed"``."""
+        for name, values in PRESETS.items():
+            if all(getattr(self, k) == v for k, v in values.items()):
+                return name
+        return "mixed"
+
+    def with_preset(self, preset: str) -> "SystemSpec":
+        """A copy with the convention switches of :data:`PRESETS` ``[preset]`` (``"corrected"`` or ``"paper"``)."""
+        return self.replace(**_check_preset(preset))
 
     @property
     def force_scale(self) -> float:
@@ -211,7 +307,7 @@ class SystemSpec:
         return dataclasses.replace(self, **changes)
 
     def nondim(self) -> "Params":
-        """The dimensionless groups (DESIGN.md, corrected Eq. 14) as a :class:`Params` PyTree."""
+        """The dimensionless groups (docs/model.md, corrected Eq. 14) as a :class:`Params` PyTree."""
         ts = self.t_star
         m_j = self.m_j
         jeff = self.rotor == "jeffcott"
@@ -224,13 +320,14 @@ class SystemSpec:
             mass_ratio=f(self.m_d / (2.0 * m_j) if jeff else 0.0),
             alpha_f=f(self.alpha_f),
             eta=f(self.eta),
-            eps=f(self.eccentricity_u / self.c),
+            eps=f(self.unbalance_factor * self.eccentricity_u / self.c),
             w_ext=f(self.load / self.force_scale),
             theta0=f(self.theta0),
             Nx=self.Nx,
             Nz=self.Nz,
             rotor=self.rotor,
             gumbel_width=self.gumbel_width,
+            structural_damping=f(1.0 if self.foil_damping == "structural" else 0.0),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -265,9 +362,13 @@ class Params(eqx.Module):
 
     Float fields (all dimensionless): ``kappa = R/L``; ``zeta``, ``sigma`` (Eq. 14, corrected); ``k_s`` shaft
     stiffness ``k_s_bar``; ``mass_ratio = m_d / (2 m_j)`` (Eq. 12a); ``alpha_f`` foil compliance; ``eta`` foil
-    loss factor; ``eps = e_u / c`` unbalance; ``w_ext`` extra vertical load per bearing over ``p0 R L``;
-    ``theta0`` foil fixed end [rad].  Static fields (part of the tree structure; changing them recompiles):
-    grid ``Nx``, ``Nz``, ``rotor`` kind and ``gumbel_width``.  ``SystemSpec.nondim`` stores the floats
+    loss factor; ``eps`` the disc's unbalance acceleration over ``c Omega^2`` (``e_u / c``, Eq. 15a, times
+    ``SystemSpec.unbalance_factor``); ``w_ext`` extra vertical load per bearing over ``p0 R L``;
+    ``theta0`` foil fixed end [rad]; ``structural_damping`` the foil damping convention (``SystemSpec.foil_damping``)
+    as a number, so that switching it does not recompile: 1 for ``c_f = eta k_f / Omega_bar`` ("structural"), 0 for
+    ``c_f = eta k_f`` ("paper"), values between blending the two as ``c_f = eta k_f / (s Omega_bar + 1 - s)``.
+    Static fields (part of the tree structure; changing them recompiles): grid ``Nx``, ``Nz``, ``rotor`` kind
+    and ``gumbel_width``.  ``SystemSpec.nondim`` stores the floats
     as 0-d float64 arrays so that ``equinox.filter_jit`` traces them (no recompilation when a value changes).
     """
 
@@ -285,6 +386,7 @@ class Params(eqx.Module):
     Nz: int = eqx.field(static=True)
     rotor: str = eqx.field(static=True, default="jeffcott")
     gumbel_width: float = eqx.field(static=True, default=0.0)
+    structural_damping: Any = 1.0
 
     def traced(self) -> "Params":
         """These parameters with every float leaf a 0-d float64 JAX array: ``equinox.filter_jit`` treats Python
@@ -296,7 +398,7 @@ class Params(eqx.Module):
         """Check the physical fields of concrete parameters against :mod:`gfbjax.limits` and return ``self``.
 
         ``kappa``, ``zeta`` > 0; ``sigma``, ``w_ext`` >= 0; ``alpha_f`` in (0, 100], ``eta`` in (0, 100] (as in
-        :class:`SystemSpec`); ``eps`` in [0, 1]; ``theta0`` in [-2 pi, 2 pi]; for the Jeffcott rotor ``k_s`` and
+        :class:`SystemSpec`); ``eps`` >= 0; ``structural_damping`` in [0, 1]; ``theta0`` in [-2 pi, 2 pi]; for the Jeffcott rotor ``k_s`` and
         ``mass_ratio`` > 0; the grid as in :class:`SystemSpec`.  The analyses that take Params call it at their
         entry, so that hand-made Params (``eqx.tree_at``) are checked as a SystemSpec is.  Leaves that are JAX
         tracers (inside ``jit``/``vmap``/``grad``) are skipped; array leaves are checked element by element.
@@ -314,14 +416,18 @@ class Params(eqx.Module):
             rng.check_all(getattr(self, name), f"Params.{name}")
         limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
         limits.GUMBEL_WIDTH.check(self.gumbel_width)
+        limits.STRUCTURAL_DAMPING.check_all(self.structural_damping, "Params.structural_damping")
         return self
 
 
 # -- named systems ----------------------------------------------------------------------------------------
 
-def reference_system(**overrides: Any) -> SystemSpec:
-    """The project's reference system (DESIGN.md): k_s_bar = 1, alpha_f = 0.1, eta = 0.05, G6.3."""
-    return SystemSpec().replace(**overrides) if overrides else SystemSpec()
+def reference_system(preset: str | None = None, **overrides: Any) -> SystemSpec:
+    """The project's reference system (docs/model.md): k_s_bar = 1, alpha_f = 0.1, eta = 0.05, G6.3.
+
+    ``preset``: ``"corrected"`` (the defaults) or ``"paper"`` (the paper's literal conventions, :data:`PRESETS`),
+    applied before ``overrides``; None keeps the defaults."""
+    return variation("reference", preset=preset, **overrides)
 
 
 VARIATIONS: dict[str, dict[str, Any]] = {
@@ -339,36 +445,49 @@ VARIATIONS: dict[str, dict[str, Any]] = {
 }
 
 
-def validation_case(load_per_bearing: float = 10.0, **overrides: Any) -> SystemSpec:
+def validation_case(load_per_bearing: float = 10.0, preset: str | None = None, **overrides: Any) -> SystemSpec:
     """The paper's validation case (Table 1; Zhou et al. 2021): rigid rotor, balanced, on two GFBs.
 
     ``k_f = 4.6417 GN/m^3`` gives ``alpha_f = p0 / (k_f c)``; the rotor mass per bearing is ``load / g``.
 
     Args:
         load_per_bearing: static load per bearing [N] (10 N in the text, 15 N in Table 1).
+        preset: convention preset applied before ``overrides`` (:data:`PRESETS`); None keeps the defaults.
     """
     limits.LOAD_PER_BEARING.check(load_per_bearing)
     p0, c, g = 1.01325e5, 31.8e-6, 9.81
     spec = dict(R=19.05e-3, L=38.1e-3, c=c, mu=1.95e-5, p0=p0, g=g, m_j=load_per_bearing / g, m_d=1.0,
                 alpha_f=p0 / (4.6417e9 * c), eta=0.25, G=0.0, rotor="rigid")
+    if preset is not None:
+        spec.update(_check_preset(preset))
+    unknown = set(overrides) - _FIELDS
+    if unknown:
+        raise ParameterError(f"unknown field(s) {sorted(unknown)}; allowed: {sorted(_FIELDS)}")
     spec.update(overrides)
     return SystemSpec(**spec)
 
 
-def variation(name: str, **overrides: Any) -> SystemSpec:
+def variation(name: str, preset: str | None = None, **overrides: Any) -> SystemSpec:
     """A named system: ``reference``, a design variation of the paper (``ks0.3``, ``ks3``, ``af0.01``, ``af1``,
-    ``eta0.005``, ``eta0.5``, ``G0``, ``G1``, ``G2.5``, ``G6.3``) or ``validation10N`` / ``validation15N``."""
+    ``eta0.005``, ``eta0.5``, ``G0``, ``G1``, ``G2.5``, ``G6.3``) or ``validation10N`` / ``validation15N``.
+
+    ``preset``: ``"corrected"`` or ``"paper"`` (:data:`PRESETS`), applied before ``overrides``; None: defaults."""
+    conventions = _check_preset(preset) if preset is not None else {}
     if name in VARIATIONS:
-        return SystemSpec(**{**VARIATIONS[name], **overrides})
+        unknown = set(overrides) - _FIELDS
+        if unknown:
+            raise ParameterError(f"unknown field(s) {sorted(unknown)}; allowed: {sorted(_FIELDS)}")
+        return SystemSpec(**{**VARIATIONS[name], **conventions, **overrides})
     if name in ("validation10N", "validation15N"):
-        return validation_case(10.0 if name == "validation10N" else 15.0, **overrides)
+        return validation_case(10.0 if name == "validation10N" else 15.0, preset=preset, **overrides)
     allowed = sorted(VARIATIONS) + ["validation10N", "validation15N"]
     raise ParameterError(f"system = {name!r} is not a named system; allowed: {allowed} or a .toml file")
 
 
 def load_config(path: str | Path) -> SystemSpec:
     """Read a TOML file of :class:`SystemSpec` fields (SI units).  An optional ``base`` key names a built-in
-    system to start from.  Unknown keys are an error naming them."""
+    system to start from, an optional ``preset`` key (``"corrected"`` or ``"paper"``) its conventions.  Unknown keys
+    are an error naming them."""
     path = Path(path)
     if not path.is_file():
         raise ParameterError(f"config file {str(path)!r} does not exist")
@@ -378,13 +497,14 @@ def load_config(path: str | Path) -> SystemSpec:
         except tomllib.TOMLDecodeError as exc:
             raise ParameterError(f"config file {str(path)!r} is not valid TOML: {exc}") from exc
     base = data.pop("base", "reference")
+    preset = data.pop("preset", None)
     if not isinstance(base, str):
         raise ParameterError(f"base = {base!r} in {str(path)!r} must be the name of a built-in system (a string), "
                              "e.g. base = \"reference\"")
     unknown = set(data) - _FIELDS
     if unknown:
         raise ParameterError(f"unknown key(s) {sorted(unknown)} in {str(path)!r}; allowed: {sorted(_FIELDS)}")
-    return variation(base, **data)
+    return variation(base, preset=preset, **data)
 
 
 def system_from_name_or_file(name: str) -> SystemSpec:

@@ -121,7 +121,12 @@ def test_energy_tiny_run(tmp_path, capsys):
     data = json.loads((out / "energy.json").read_text())
     pts = data["points"]
     assert len(pts) >= 2
-    assert all(set(p) == {"Omega_bar", "stable", "W_fu", "W_B", "W_cf", "W_cb"} for p in pts)
+    works = ("W_fu", "W_B", "W_cf", "W_cb")
+    assert all(set(p) == {"Omega_bar", "rpm", "stable", *works, *(f"{w}_J" for w in works)} for p in pts)
+    unit_J = 1e5 * 19.05e-3 * 38.1e-3 * 38.1e-6  # p0 R L c of the reference system (README), J
+    for p in pts:
+        for w in works:
+            assert p[f"{w}_J"] == pytest.approx(p[w] * unit_J, rel=1e-12)
     for p in pts:
         assert p["W_fu"] > 0 and p["W_cf"] > 0
         assert p["W_cb"] == pytest.approx(p["W_B"] - p["W_cf"], rel=1e-12, abs=1e-15)
@@ -132,6 +137,20 @@ def test_energy_tiny_run(tmp_path, capsys):
     printed = [ln for ln in stdout.splitlines() if "identity error" in ln]
     assert printed and float(printed[0].split("=")[-1]) < 1e-9
     assert "NS speeds" in stdout and "W_cb sign changes" in stdout
+
+    # the saved branch, read back with --branch, gives the same works without a continuation
+    again = tmp_path / "again"
+    code, stdout, _ = _run(["energy", "--branch", str(out / "branch.npz"), "--out", str(again)], capsys)
+    assert code == (0 if data["range"]["reached_end"] else 1)
+    pts2 = json.loads((again / "energy.json").read_text())["points"]
+    assert [p["Omega_bar"] for p in pts2] == [p["Omega_bar"] for p in pts]
+    for a, b in zip(pts, pts2):
+        for key in ("W_fu", "W_B", "W_cf", "W_cb"):
+            assert b[key] == pytest.approx(a[key], rel=1e-12, abs=1e-15), key
+    assert not (again / "branch.npz").exists()  # nothing recomputed, nothing rewritten
+    # a system option with --branch is refused: the system comes from the file
+    code, _, err = _run(["energy", "--branch", str(out / "branch.npz"), "--nx", "24", "--out", str(again)], capsys)
+    assert code == 2 and "--nx" in err
 
 
 def test_optimize_one_speed(tmp_path, capsys):

@@ -147,7 +147,7 @@ def test_speed_conversions_refuse_non_finite(method, value):
 
 @pytest.mark.parametrize("field, value", [
     ("alpha_f", -0.1), ("alpha_f", 0.0), ("eta", -0.05), ("eta", float("nan")), ("zeta", -1.0), ("kappa", 0.0),
-    ("mass_ratio", -1.0), ("k_s", 0.0), ("sigma", -0.1), ("eps", 2.0),
+    ("mass_ratio", -1.0), ("k_s", 0.0), ("sigma", -0.1), ("eps", -0.5),
 ])
 def test_params_check_names_the_field(small_params, field, value):
     bad = eqx.tree_at(lambda q: getattr(q, field), small_params, jnp.asarray(value))

@@ -24,7 +24,8 @@ NAN = float("nan")
     ("alpha_f", 0.0), ("alpha_f", -0.1), ("alpha_f", NAN),
     ("eta", -0.01), ("eta", NAN),
     ("G", -1.0), ("G", 1000.0),
-    ("e_u", -1e-6), ("e_u", 1e-3),  # e_u larger than the clearance
+    ("e_u", -1e-6), ("e_u", NAN),  # (e_u above the clearance is allowed with a warning: tests/test_conventions.py)
+    ("foil_damping", "viscous"), ("unbalance_mass", "journal"), ("omega_r_unit", "Hz"),
     ("omega_r", 0.0),
     ("theta0", 10.0),
     ("load", -1.0),
@@ -114,7 +115,7 @@ def test_unbalance_eccentricity():
 
 
 def test_reference_dimensionless_groups_by_hand():
-    """From DESIGN.md's SI values: R = 19.05 mm, L = 38.1 mm, c = R/500, mu = 1.8e-5 Pa s, p0 = 1e5 Pa,
+    """From docs/model.md's SI values: R = 19.05 mm, L = 38.1 mm, c = R/500, mu = 1.8e-5 Pa s, p0 = 1e5 Pa,
     g = 9.81 m/s^2, m_j = 0.5 kg, m_d = 1 kg, G6.3.
 
     t*    = 6 mu R^2/(p0 c^2) = 6 * 1.8e-5 * 500^2 / 1e5                 = 2.7e-4 s
@@ -132,7 +133,7 @@ def test_reference_dimensionless_groups_by_hand():
     assert p.eps == pytest.approx(2.52 / 38.1, rel=1e-12)
     assert p.kappa == 0.5 and p.mass_ratio == 1.0 and p.k_s == 1.0
     assert p.alpha_f == 0.1 and p.eta == 0.05 and p.w_ext == 0.0
-    # DESIGN.md's closed forms in the physical constants (zeta = 36 mu^2 L R^5/(m_j p0 c^5), sigma with R^4)
+    # docs/model.md's closed forms in the physical constants (zeta = 36 mu^2 L R^5/(m_j p0 c^5), sigma with R^4)
     mu, R, L, c, p0 = 1.8e-5, 19.05e-3, 38.1e-3, 38.1e-6, 1e5
     assert p.zeta == pytest.approx(36 * mu**2 * L * R**5 / (0.5 * p0 * c**5), rel=1e-12)
     assert p.sigma == pytest.approx(36 * mu**2 * R**4 * 9.81 / (p0**2 * c**5), rel=1e-12)
@@ -161,3 +162,12 @@ def test_named_variations():
     assert variation("G0").nondim().eps == 0.0
     assert set(gfbjax.VARIATIONS) >= {"reference", "ks0.3", "ks3", "af0.01", "af1", "eta0.005", "eta0.5", "G0",
                                       "G1", "G2.5", "G6.3"}
+
+
+@pytest.mark.parametrize("geom, word", [((1.5e-3, 1e-2, 4.5e-3), "t_b"), ((1.5e-3, 1e-4, 1e-3), "s0")])
+def test_bump_compliance_refuses_what_is_no_bump_foil(geom, word):
+    """A foil thicker than its bump, or overlapping bumps: the thin-beam formula does not apply (a fresh user's
+    report: the inverse refused these, the forward formula gave a number)."""
+    l0, t_b, s0 = geom
+    with pytest.raises(ParameterError, match=word):
+        bump_foil_compliance(l0, t_b, s0, 2.07e11, 0.29, 1e5, 38.1e-6)

@@ -1,6 +1,6 @@
-"""Plain rigid 360-degree gas journal bearing (gfbjax.analyses.plain) against REFERENCE.md.
+"""Plain rigid 360-degree gas journal bearing (gfbjax.analyses.plain) against docs/model.md.
 
-References are independent of the finite-difference solver: the numbers printed in REFERENCE.md's table, the
+References are independent of the finite-difference solver: the numbers printed in docs/model.md's table, the
 closed form of Al-Bender (``small_eccentricity_reference``, itself checked against the printed table here), the
 incompressible / short-bearing limits and the whirl relation ``Lambda_eff = Lambda - 2 nu``.
 
@@ -28,7 +28,7 @@ from gfbjax.analyses.plain import plain_bearing_steady, small_eccentricity_refer
 
 jax.config.update("jax_enable_x64", True)
 
-# REFERENCE.md, L/D = 1: Lambda -> (W / (eps p0 L D), attitude angle in degrees), as printed.
+# docs/model.md, L/D = 1: Lambda -> (W / (eps p0 L D), attitude angle in degrees), as printed.
 TABLE = {
     0.1: (0.0374, 88.38),
     0.5: (0.1853, 81.93),
@@ -51,7 +51,7 @@ def _steady(Lambda, eps=EPS, kappa=KAPPA_LD1, grid=GRID, **kw):
     return r
 
 
-# -- (a) REFERENCE.md's table ---------------------------------------------------------------------------
+# -- (a) docs/model.md's table ---------------------------------------------------------------------------
 
 @pytest.mark.parametrize("Lambda", list(TABLE))
 def test_closed_form_reproduces_printed_table(Lambda):
@@ -152,7 +152,7 @@ def test_small_lambda_limit():
 
 
 def _short(lam, eps, ld):
-    """REFERENCE.md's short-bearing, incompressible, full-film limit W/(p0 L D)."""
+    """docs/model.md's short-bearing, incompressible, full-film limit W/(p0 L D)."""
     return math.pi / 6.0 * lam * eps * ld**2 / (1.0 - eps**2) ** 1.5
 
 

@@ -61,7 +61,7 @@ def test_force_balance(equilibria, name):
     params, omega, w, r = equilibria[name]
     assert r.outcome == "converged", r.message
     assert r.pressure.shape == (params.Nx + 1, params.Nz + 1)
-    # the grid the result reports is the one of DESIGN.md: foil ends theta0, theta0 + 2 pi; z from edge to mid-plane
+    # the grid the result reports is the one of docs/model.md: foil ends theta0, theta0 + 2 pi; z from edge to mid-plane
     assert r.theta[0] == pytest.approx(params.theta0) and r.theta[-1] == pytest.approx(params.theta0 + 2 * math.pi)
     assert r.z[0] == 0.0 and r.z[-1] == pytest.approx(0.5)
     np.testing.assert_allclose(r.pressure[:, 0], 1.0)  # bearing edge
@@ -123,3 +123,21 @@ def test_newton_from_a_converged_equilibrium_stops_at_once():
     sol = newton_solve(jnp.asarray(eq.state), jnp.asarray(0.3), params.traced())
     assert bool(sol.converged) and int(sol.iterations) <= 1
     assert float(sol.residual) < 1e-9
+
+
+def test_system_load_is_carried_by_the_static_solve():
+    """SystemSpec.load (in params.w_ext) is part of the load a static solve carries: the equilibrium of a system
+    with load L equals that of the unloaded system with the same extra load given to the solver (found by a
+    sweep: it used to be dropped, so sweeping 'load' changed nothing)."""
+    import gfbjax
+    from gfbjax.analyses.static import solve_equilibrium
+
+    loaded = gfbjax.reference_system(Nx=16, Nz=2, load=5.0)
+    plain = gfbjax.reference_system(Nx=16, Nz=2)
+    w = 5.0 / (plain.p0 * plain.L * 2 * plain.R)  # W / (p0 L D)
+    a = solve_equilibrium(loaded.nondim(), 0.3)
+    b = solve_equilibrium(plain.nondim(), 0.3, w)
+    assert a.converged and b.converged
+    assert a.w == pytest.approx(w, rel=1e-12) and b.w == pytest.approx(w, rel=1e-12)
+    np.testing.assert_allclose(a.state, b.state, atol=1e-9)
+    assert a.h_min < solve_equilibrium(plain.nondim(), 0.3).h_min  # the load pushes the journal into the film

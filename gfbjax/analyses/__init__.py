@@ -6,5 +6,7 @@
 * :mod:`.transient` -- diffrax time integration at constant speed and through a run-up (Eq. 15a/b);
 * :mod:`.signals` -- steady state, Poincare sections, spectra, run-up STFT;
 * :mod:`.energy` -- the works W_fu, W_B, W_cf, W_cb of a cycle (Sect. 3.3);
-* :mod:`.plain` -- the plain rigid 360-degree gas bearing, for validation against analytic results.
+* :mod:`.plain` -- the plain rigid 360-degree gas bearing, for validation against analytic results;
+* :mod:`.coefficients` -- linearised stiffness and damping of one bearing, the rotor assembled from them, export to
+  ROSS.
 """

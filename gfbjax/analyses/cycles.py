@@ -10,13 +10,18 @@ A branch starts at a low speed from the *linear forced response* around the stat
     x(tau) = x_eq + Re( (i Omega I - J)^-1 B eps Omega^2 (1, -i) e^{i Omega tau} ),
 
 with J the Jacobian of the balanced system and B the input matrix of the unbalance force, a first-order harmonic
-balance that puts collocation Newton well inside its basin.
+balance that puts collocation Newton well inside its basin.  At a large unbalance (the paper's literal 24.1 um
+carried by the disc, docs/model.md) that guess can sweep the journal through the foil (the linearised film
+thickness goes negative), and Newton diverges from it.  :func:`unbalance_response_start` then ramps the unbalance
+up instead: it corrects the cycle at a fraction of ``eps`` small enough for the linear guess to keep the film open,
+and raises the fraction to 1, each cycle the start of the next.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any, Callable
 
 import jax
@@ -25,6 +30,7 @@ import numpy as np
 
 from .. import cont
 from ..model import core_rates, layout, vector_field
+from ..model.system import film
 from ..model.pattern import jacobian_sparsity
 from .. import limits
 from ..params import ParameterError, Params, SystemSpec
@@ -32,8 +38,10 @@ from ..limits import NoSolutionError
 from .static import StaticResult, solve_equilibrium
 
 __all__ = ["JOURNAL_AND_DISC", "default_cycle_settings", "gfb_cycle_problem", "gfb_equilibrium_problem",
-           "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "rotor_components",
+           "gfb_self_excited_problem", "jacobian_sparsity", "linear_response_start", "unbalance_response_start",
+           "rotor_components",
            "continue_gfb_cycles", "continue_gfb_equilibria", "continue_gfb_hopf_cycles", "hopf_criticality",
+           "film_monitor", "CONTACT_ACTIONS",
            "CONVENTIONS", "branch_meta", "branch_units", "describe_branch"]
 
 JOURNAL_AND_DISC = ("x_j", "y_j", "x_d", "y_d")
@@ -55,28 +63,54 @@ def rotor_components(params: Params, oscillator: bool = True) -> list[int]:
     return list(range(start, start + npos))
 
 
-def gfb_cycle_problem(params: Params) -> cont.CycleProblem:
+CONTACT_ACTIONS = ("stop", "flag")
+
+
+def _h_min(x: jax.Array, lam: jax.Array, params: Params) -> jax.Array:
+    return jnp.min(film(x, params))
+
+
+def film_monitor(h_rub: float = 0.0, on_contact: str = "stop") -> cont.Monitor:
+    """The minimum film thickness h_min / c as the physical bound of a GFB branch (:class:`gfbjax.cont.Monitor`).
+
+    Why: the model's film is the gap between journal and foil; where it closes (h_min <= 0) the Reynolds equation
+    no longer describes the bearing (the journal rubs the foil), yet the equations still have converged
+    solutions there.  ``h_rub`` [over c] is the thickness at which contact is declared (0: the film closes; a
+    rub allowance or the surface roughness, > 0).  ``on_contact``: "stop" ends the branch at the located contact
+    (``Outcome.CONTACT``), "flag" continues and flags the points below ``h_rub`` (``Branch.flagged``).  Every
+    point's h_min is in ``Branch.monitor``.  ParameterError for a bad ``h_rub`` or ``on_contact``.
+    """
+    h_rub = limits.Range("h_rub", -1.0, 1.0, hi_open=True, what="contact film thickness over c").check(h_rub)
+    if on_contact not in CONTACT_ACTIONS:
+        raise ParameterError(f"on_contact must be one of {CONTACT_ACTIONS}, got {on_contact!r}")
+    return cont.Monitor("h_min", _h_min, float(h_rub), stop=on_contact == "stop", unit="c")
+
+
+def gfb_cycle_problem(params: Params, monitor: cont.Monitor | None = None) -> cont.CycleProblem:
     """Periodic orbits of the autonomous unbalanced system, Eq. (21), in Omega_bar (one trivial multiplier).
 
     The problem carries the Jacobian's sparsity pattern: on fine grids the continuation uses the sparse
     per-interval LU of sparse linear solver of :mod:`gfbjax.cont` (``CycleSettings.linear_solver=None``, automatic)."""
     lay = layout(params, oscillator=True)
     return cont.CycleProblem(f=_f_cycles, n=lay.n, args=params, n_trivial=1,
-                             record=rotor_components(params, True), jac_sparsity=jacobian_sparsity(params))
+                             record=rotor_components(params, True), jac_sparsity=jacobian_sparsity(params),
+                             monitor=monitor)
 
 
-def gfb_self_excited_problem(params: Params) -> cont.CycleProblem:
+def gfb_self_excited_problem(params: Params, monitor: cont.Monitor | None = None) -> cont.CycleProblem:
     """Periodic orbits of the *balanced* core system (no oscillator): the self-excited whirl cycles that emanate
     from a Hopf point of the equilibria (paper Table 1), in Omega_bar; period unknown, one trivial multiplier."""
     lay = layout(params, oscillator=False)
     return cont.CycleProblem(f=_f_equilibria, n=lay.n, args=params, n_trivial=1,
-                             record=rotor_components(params, False), jac_sparsity=jacobian_sparsity(params, False))
+                             record=rotor_components(params, False), jac_sparsity=jacobian_sparsity(params, False),
+                             monitor=monitor)
 
 
-def gfb_equilibrium_problem(params: Params) -> cont.EquilibriumProblem:
+def gfb_equilibrium_problem(params: Params, monitor: cont.Monitor | None = None) -> cont.EquilibriumProblem:
     """Equilibria of the balanced system (G0) in Omega_bar: Hopf points start self-excited cycles."""
     lay = layout(params, oscillator=False)
-    return cont.EquilibriumProblem(f=_f_equilibria, n=lay.n, args=params, record=rotor_components(params, False))
+    return cont.EquilibriumProblem(f=_f_equilibria, n=lay.n, args=params, record=rotor_components(params, False),
+                                   monitor=monitor)
 
 
 def linear_response_start(params: Params, omega: float, equilibrium: StaticResult | None = None
@@ -104,6 +138,80 @@ def linear_response_start(params: Params, omega: float, equilibrium: StaticResul
         return np.concatenate([core, np.cos(ph)[:, None], np.sin(ph)[:, None]], axis=1)
 
     return x_of_t, T, eq
+
+
+def _guess_films(params: Params, x_of_t: Callable[[np.ndarray], np.ndarray], x_eq: np.ndarray, samples: int = 64
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Film thickness h/c of the equilibrium ``x_eq`` (core states) at every circumferential node, shape (Nx+1,), and
+    the change the guess ``x_of_t`` makes to it at ``samples`` times of one period, shape (samples, Nx+1).  The film
+    is linear in the state, so the guess scaled by s changes it by s times as much."""
+    from ..model import film
+
+    t = np.linspace(0.0, 1.0, samples, endpoint=False)
+    h = np.asarray(jax.vmap(lambda x: film(x, params))(jnp.asarray(x_of_t(t)[:, :-2])))
+    h_eq = np.asarray(film(jnp.asarray(x_eq), params))
+    return h_eq, h - h_eq[None, :]
+
+
+def unbalance_response_start(params: Params, omega: float, settings: cont.CycleSettings | None = None, *,
+                             equilibrium: StaticResult | None = None, open_fraction: float = 0.5,
+                             max_stages: int = 40) -> tuple[cont.Orbit, str]:
+    """A start for the unbalance-response cycle at speed ``omega`` (Omega_bar), on the mesh of ``settings``.
+
+    Returns ``(orbit, how)``.  ``how = "linear"``: the linear forced response (:func:`linear_response_start`),
+    uncorrected, when its film stays open (h > 0 at every node over the period).  Otherwise ``how =
+    "unbalance ramp"`` and ``orbit`` is a converged cycle: the unbalance ``eps`` is scaled by ``s``, starting where
+    the linear guess keeps at least ``open_fraction`` of the equilibrium's film at every node (the linearised film
+    is linear in ``s``), and ``s`` is raised to 1 in steps that grow by 1.5 after a converged cycle and halve after
+    a failed one, each cycle warm-starting the next (at most ``max_stages`` corrections).
+
+    Raises :class:`gfbjax.NoSolutionError` when the ramp stalls (step below 1e-3) or no static equilibrium exists.
+    """
+    import equinox as eqx
+
+    settings = settings or default_cycle_settings()
+    x_of_t, T, eq = linear_response_start(params, omega, equilibrium)
+    scheme = cont.Scheme(settings.m)
+    mesh = cont.uniform_mesh(settings.N)
+    xe_core = np.asarray(eq.state)
+    h_eq, dh = _guess_films(params, x_of_t, xe_core)
+    if float(np.min(h_eq[None, :] + dh)) > 0.0:
+        return cont.orbit_from_function(x_of_t, T, float(omega), scheme, mesh), "linear"
+    closing = dh < 0.0
+    s0 = float(np.min(((1.0 - open_fraction) * np.broadcast_to(h_eq, dh.shape))[closing] / -dh[closing]))
+    s0 = min(max(s0, 1e-3), 1.0)
+
+    def scaled_guess(s: float):
+        def x_s(t):
+            x = x_of_t(t)
+            core = xe_core[None, :] + s * (x[:, :-2] - xe_core[None, :])
+            return np.concatenate([core, x[:, -2:]], axis=1)
+        return cont.orbit_from_function(x_s, T, float(omega), scheme, mesh)
+
+    newton = dataclasses.replace(settings, newton_max_iter=max(settings.newton_max_iter, 12))
+    eps = params.eps
+    orbit, s_done, s, step = None, 0.0, s0, s0
+    for _ in range(max_stages):
+        p_s = eqx.tree_at(lambda q: q.eps, params, jnp.asarray(float(eps) * s, dtype=jnp.float64))
+        guess = scaled_guess(s) if orbit is None else orbit
+        sol, _ = cont.correct_cycle(gfb_cycle_problem(p_s), guess, settings=newton)
+        if sol.converged:
+            orbit, s_done = sol.x, s
+            if s_done >= 1.0:
+                return orbit, "unbalance ramp"
+            step *= 1.5
+        else:
+            step *= 0.5
+            if orbit is None:  # not even the first, small unbalance: shrink it
+                s0 = s = s * 0.5
+                if s < 1e-3:
+                    break
+                continue
+            if step < 1e-3:
+                break
+        s = min(1.0, s_done + step)
+    raise NoSolutionError(f"no unbalance-response cycle at Omega_bar = {omega}: the ramp in the unbalance stalled at "
+                          f"{s_done:.3g} of eps = {float(eps):.4g}")
 
 
 def default_cycle_settings(**changes: Any) -> cont.CycleSettings:
@@ -139,7 +247,8 @@ def _check_size(problem: cont.CycleProblem, settings: cont.CycleSettings) -> Non
 def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
                         settings: cont.CycleSettings | None = None, *, progress: bool = False,
                         callback: Callable[[int, Any], Any] | None = None,
-                        spec: SystemSpec | None = None) -> cont.Branch:
+                        spec: SystemSpec | None = None, checkpoint: str | os.PathLike | None = None,
+                        h_rub: float = 0.0, on_contact: str = "stop") -> cont.Branch:
     """Branch of unbalance-response limit cycles from ``omega_start`` towards ``omega_end`` (Omega_bar).
 
     The start is the linear forced response at ``omega_start`` (corrected by collocation Newton); the branch
@@ -151,8 +260,17 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     state layout and the conventions, and with ``spec`` (the SystemSpec ``params`` came from) also the SI system
     and the rpm conversion; ``component_names`` are x_j, y_j (, x_d, y_d); ``units`` those of each array.
     ParameterError when ``spec`` is not the system of ``params``.
+
+    ``checkpoint``: a folder that every accepted point is appended to, with the state the next step starts from
+    (:class:`gfbjax.cont.Checkpoint`); calling again with the same folder and arguments resumes after the last
+    point and gives the branch an uninterrupted run gives (``CheckpointError`` for a folder of another run).
+
+    Film contact: the minimum film thickness over each cycle is watched (``Branch.monitor``, over c); where it
+    falls to ``h_rub`` the branch ends there (``on_contact="stop"``, outcome ``CONTACT``) or goes on with the
+    points flagged (``"flag"``), see :func:`film_monitor`.
     """
     omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
+    monitor = film_monitor(h_rub, on_contact)
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
                              "and start cycles from its Hopf point")
@@ -164,31 +282,44 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     settings = dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
                                    direction=direction)
     meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast
-    problem = gfb_cycle_problem(params)
+    problem = gfb_cycle_problem(params, monitor)
     _check_size(problem, settings)
-    x_of_t, T, _ = linear_response_start(params, omega_start)
-    start = cont.start_from_function(x_of_t, T, omega_start, settings)
-    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback)
+    orbit, how = unbalance_response_start(params, omega_start, settings)
+    start = cont.CycleStart(orbit, None, how)
+    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback,
+                                  checkpoint=_checkpoint(checkpoint, meta, omega_start, omega_end,
+                                                         monitor.describe()))
     return describe_branch(branch, meta)
+
+
+def _checkpoint(folder: str | os.PathLike | None, meta: dict[str, Any], *args: Any) -> cont.Checkpoint | None:
+    """The checkpoint of a GFB branch: its identity is the system (``meta``) and the arguments of the call."""
+    return None if folder is None else cont.Checkpoint(folder, {"system": meta, "arguments": list(args)})
 
 
 def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int = 0,
                              settings: cont.CycleSettings | None = None, *, progress: bool = False,
                              callback: Callable[[int, Any], Any] | None = None,
-                             spec: SystemSpec | None = None) -> cont.Branch:
+                             spec: SystemSpec | None = None,
+                             checkpoint: str | os.PathLike | None = None,
+                             h_rub: float = 0.0, on_contact: str = "stop") -> cont.Branch:
     """Self-excited cycles from the ``which``-th Hopf point of an equilibrium branch (:func:`continue_gfb_equilibria`).
 
     The branch leaves the Hopf point along its first harmonic; toward higher speed with stable cycles when the
     Hopf bifurcation is supercritical, toward lower speed with unstable ones when it is subcritical (the sign of
     ``Branch.tangent_lam`` on the first points tells which).  ``settings.lam_min``/``lam_max`` bound the speed.
-    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``)."""
+    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``), and
+    ``checkpoint``, ``h_rub`` and ``on_contact`` work as there."""
     settings = settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=80)
     meta = branch_meta(params, "self_excited", spec)
+    monitor = film_monitor(h_rub, on_contact)
     hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
-    problem = gfb_self_excited_problem(params)
+    problem = gfb_self_excited_problem(params, monitor)
     _check_size(problem, settings)
     start = cont.start_from_hopf(hp, settings)
-    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback)
+    branch = cont.continue_cycles(problem, settings, start, progress=progress, callback=callback,
+                                  checkpoint=_checkpoint(checkpoint, meta, float(hp.lam), which,
+                                                         monitor.describe()))
     return describe_branch(branch, meta)
 
 
@@ -206,12 +337,16 @@ def hopf_criticality(cycles: cont.Branch, lam_hopf: float) -> str:
 
 def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float,
                             settings: cont.EquilibriumSettings | None = None, *, spec: SystemSpec | None = None,
-                            **kw: Any) -> cont.Branch:
+                            checkpoint: str | os.PathLike | None = None, h_rub: float = 0.0,
+                            on_contact: str = "stop", **kw: Any) -> cont.Branch:
     """Branch of static equilibria of the balanced system in Omega_bar, with eigenvalues, Hopf and fold points.
 
-    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``);
-    ``kw`` goes to :func:`gfbjax.cont.continue_equilibria` (``callback``, ``progress``)."""
+    The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``), and
+    ``checkpoint``, ``h_rub`` and ``on_contact`` (the film thickness of each equilibrium) work as there; ``kw``
+    goes to :func:`gfbjax.cont.continue_equilibria` (``callback``,
+    ``progress``)."""
     omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
+    monitor = film_monitor(h_rub, on_contact)
     meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:
@@ -224,13 +359,15 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
     upd = {k: v for k, v in (("lam_min", lo), ("lam_max", hi),
                              ("direction", 1 if omega_end > omega_start else -1)) if k in fields}
     settings = dataclasses.replace(settings, **upd)
-    branch = cont.continue_equilibria(gfb_equilibrium_problem(params), settings, eq.state, omega_start, **kw)
+    branch = cont.continue_equilibria(gfb_equilibrium_problem(params, monitor), settings, eq.state, omega_start,
+                                      checkpoint=_checkpoint(checkpoint, meta, omega_start, omega_end,
+                                                             monitor.describe()), **kw)
     return describe_branch(branch, meta)
 
 
 # -- self-describing branches -------------------------------------------------------------------------------
 
-#: Conventions of every branch of this module (DESIGN.md, :mod:`gfbjax.params`), written into ``Branch.meta``
+#: Conventions of every branch of this module (docs/model.md, :mod:`gfbjax.params`), written into ``Branch.meta``
 #: so that a branch file can be read without gfbjax at hand.
 CONVENTIONS = {
     "time": "tau = t / t*, t* = 6 mu R^2 / (p0 c^2) [s]",
@@ -241,7 +378,10 @@ CONVENTIONS = {
     "forces": "over p0 R L",
     "axes": "x horizontal, y vertical and pointing up (gravity along -y); the rotor spins from x towards y",
     "theta0": "angle of the foil's fixed end [rad], from the x axis towards the y axis",
-    "unbalance": "eps = e_u / c with e_u = G / omega_r (ISO 1940, G in mm/s) unless e_u is given",
+    "unbalance": "eps = e_u / c with e_u = G / omega_r (ISO 1940, G in mm/s; omega_r in spec.omega_r_unit) unless "
+                 "e_u is given, times (m_d + 2 m_j) / m_d when spec.unbalance_mass is 'rotor'",
+    "foil_damping": "c_f = eta k_f / Omega_bar when params.structural_damping is 1 (spec.foil_damping "
+                    "'structural'), eta k_f when 0 ('paper')",
     "rotor_states": "jeffcott: x_j, y_j, x_d, y_d and their d/dtau; rigid: x_j, y_j and their d/dtau",
 }
 
@@ -274,7 +414,8 @@ def branch_meta(params: Params, problem: str, spec: SystemSpec | None = None) ->
     (:data:`CONVENTIONS`), ``params`` (every field of ``params``: the dimensionless groups as floats, grid, rotor
     kind), ``grid`` (``Nx``, ``Nz``, ``n_theta``, ``n_pressure``), ``state_layout`` (``n`` states, ``oscillator``,
     ``slices`` as [start, stop) per part, ``rotor_states`` names), ``component_names`` and, with ``spec``:
-    ``spec`` (``spec.to_dict()``, SI), ``t_star_s`` [s], ``c_m`` [m] and ``rpm_per_omega_bar``
+    ``spec`` (``spec.to_dict()``, SI, with the convention switches ``foil_damping``, ``unbalance_mass`` and
+    ``omega_r_unit``), ``preset`` (``spec.preset``), ``t_star_s`` [s], ``c_m`` [m] and ``rpm_per_omega_bar``
     (``spec.rpm(1.0)``: rpm = Omega_bar * rpm_per_omega_bar).
 
     Raises ParameterError when ``spec`` is not the system of ``params`` (a field of ``spec.nondim()`` differs),
@@ -315,7 +456,7 @@ def branch_meta(params: Params, problem: str, spec: SystemSpec | None = None) ->
         "component_names": list(JOURNAL_AND_DISC[:npos]),
     }
     if spec is not None:
-        meta.update({"spec": spec.to_dict(), "t_star_s": spec.t_star, "c_m": spec.c,
+        meta.update({"spec": spec.to_dict(), "preset": spec.preset, "t_star_s": spec.t_star, "c_m": spec.c,
                      "rpm_per_omega_bar": spec.rpm(1.0)})
     return meta
 

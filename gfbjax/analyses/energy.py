@@ -1,6 +1,6 @@
 r"""Energy flow of a limit cycle, paper Sect. 3.3, Eq. (23)-(24); units of ``p0 R L c``.
 
-Over one period of a cycle of the autonomous system (Eq. 21), with the sign convention of DESIGN.md
+Over one period of a cycle of the autonomous system (Eq. 21), with the sign convention of docs/model.md
 (positive = energy leaving the rotor into the films and foils):
 
 * ``W_fu`` — work of the unbalance force on the disc (rigid rotor: on the rotor), Eq. (23c);
@@ -8,7 +8,8 @@ Over one period of a cycle of the autonomous system (Eq. 21), with the sign conv
   bearing, Eq. 7), Eq. (23a) with ``W_kb = 0``;
 * ``W_cf = 2 \sum_i \oint c_f \dot q_i \, dq_i \; \Delta\theta`` — dissipation in the bump-foil dampers of both
   bearings, Eq. (23b): each strip i spans ``\Delta\theta`` of the circumference over the whole length L, so its
-  damper force is ``c_f \dot q_i`` (pressure units, ``c_f = eta / (alpha_f Omega_bar)``) times the strip area
+  damper force is ``c_f \dot q_i`` (pressure units, ``c_f = eta / (alpha_f Omega_bar)``, or ``eta / alpha_f``
+  with ``Params.structural_damping = 0``, the paper's convention) times the strip area
   ``R L \Delta\theta``; the spring part integrates to zero on a closed orbit;
 * ``W_cb = W_B - W_cf`` — net dissipation in the gas films, Eq. (24) (``W_fu = W_cf + W_cb`` with ``T_1 = T_2``).
 
@@ -18,7 +19,7 @@ m Gauss points of every mesh interval, where the collocation equations make ``x'
 solution the identity then holds to rounding: the kinetic-energy and shaft-spring terms are polynomials of degree
 2m - 1 per interval, integrated exactly by m-point Gauss.
 
-Unit conversions (DESIGN.md): the gas force is in ``p0 R L`` and displacements in ``c``; the unbalance term of the
+Unit conversions (docs/model.md): the gas force is in ``p0 R L`` and displacements in ``c``; the unbalance term of the
 equations is an acceleration, so the force on the disc is ``(m_d / m_j) F_U / zeta = 2 mass_ratio F_U / zeta``
 (rigid rotor, mass ``2 m_j`` per two bearings: ``2 F_U / zeta``).
 """
@@ -33,7 +34,7 @@ from jax import Array
 
 from .. import cont
 from ..model import layout
-from ..model.foil import foil_rates
+from ..model.foil import foil_damping_coefficient, foil_rates
 from ..model.reynolds import bearing_force, gauge, mean_gauge_pressure
 from ..model.rotor import unbalance_force
 from ..params import Params
@@ -66,8 +67,8 @@ def power(s: Array, omega: Array, params: Params) -> Array:
         v_j, v_u, to_force = r[4:6], r[6:8], 2.0 * params.mass_ratio / params.zeta
     F_U = unbalance_force(omega, params.eps, u, v)
     qdot = foil_rates(q, gauge(mean_gauge_pressure(P, grid), params.gumbel_width), omega, params.alpha_f,
-                      params.eta)
-    c_f = params.eta / (params.alpha_f * omega)
+                      params.eta, params.structural_damping)
+    c_f = foil_damping_coefficient(omega, params.alpha_f, params.eta, params.structural_damping)
     return jnp.stack([to_force * jnp.dot(F_U, v_u), -2.0 * jnp.dot(F_B, v_j),
                       2.0 * grid.dtheta * c_f * jnp.sum(qdot * qdot)])
 
@@ -93,7 +94,8 @@ cycle_energy = jax.jit(orbit_energy)
 
 @jax.jit
 def _batch(xm, xi, mesh, T, lam, params):
-    return jax.vmap(lambda a, b, c, d: _period_integrals(a, b, mesh, c, d, params))(xm, xi, T, lam)
+    # mesh: (P, N+1), one per point (adapted meshes)
+    return jax.vmap(lambda a, b, g, c, d: _period_integrals(a, b, g, c, d, params))(xm, xi, mesh, T, lam)
 
 
 def branch_energy(branch: Any, params: Params) -> CycleEnergy:
@@ -101,7 +103,10 @@ def branch_energy(branch: Any, params: Params) -> CycleEnergy:
     s = branch.states
     if s is None:
         raise ValueError("branch has no stored states: continue it with CycleSettings(save_states=True)")
-    W = np.asarray(_batch(jnp.asarray(s["xm"]), jnp.asarray(s["xi"]), jnp.asarray(s["mesh"]), jnp.asarray(s["T"]),
+    mesh = np.asarray(s["mesh"], float)
+    if mesh.ndim == 1:  # files of earlier versions: one mesh shared by every point
+        mesh = np.broadcast_to(mesh, (len(s["T"]), mesh.size))
+    W = np.asarray(_batch(jnp.asarray(s["xm"]), jnp.asarray(s["xi"]), jnp.asarray(mesh), jnp.asarray(s["T"]),
                           jnp.asarray(s["lam"]), params))
     return CycleEnergy(W[:, 0], W[:, 1], W[:, 2], W[:, 1] - W[:, 2])
 

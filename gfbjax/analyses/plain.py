@@ -1,4 +1,4 @@
-"""Plain rigid 360-degree gas journal bearing: the validation model of REFERENCE.md.
+"""Plain rigid 360-degree gas journal bearing: the validation model of docs/model.md.
 
 Whirl integration uses an own L-stable SDIRK scheme rather than diffrax's Kvaerno5: with a dense Jacobian and
 diffrax's VeryChord root finder Kvaerno5 rejected about half its steps and took 20-60 s per orbit on a 256-unknown
@@ -10,7 +10,7 @@ circumferential angle theta, ambient pressure at both bearing edges.  The film i
 finite-difference Reynolds operator as the foil bearing (:func:`gfbjax.model.plain_bearing_rates`, second order)
 on the half length (mid-plane symmetry), so this module validates the pressure equation of the GFB model.
 
-Everything is dimensionless (DESIGN.md):
+Everything is dimensionless (docs/model.md):
 
 * bearing number ``Lambda = 6 mu Omega R^2 / (p0 c^2)`` [-], identical to the speed ``Omega_bar = Omega t*``;
 * journal position ``(x, y)`` over the radial clearance c [-]; eccentricity ratio ``eps = sqrt(x^2 + y^2)``;
@@ -22,7 +22,7 @@ Public functions:
 
 * :func:`plain_bearing_steady` — steady pressure by Newton's method (exact Jacobian by ``jax.jacfwd``), load and
   attitude angle;
-* :func:`small_eccentricity_reference` — the independent closed form of REFERENCE.md (first order in eps);
+* :func:`small_eccentricity_reference` — the independent closed form of docs/model.md (first order in eps);
 * :func:`whirl_force` — time integration (L-stable SDIRK, exact Jacobian) with the journal on a prescribed
   circular orbit; the force in the rotating frame checks the time-dependent (squeeze) term of the Reynolds
   equation against the steady bearing at ``Lambda_eff = Lambda - 2 nu``.
@@ -182,7 +182,7 @@ def plain_bearing_steady(Lambda: float | Array, x: float | Array, y: float | Arr
         Nx: circumferential intervals over 2 pi, in [8, 1024].
         Nz: axial intervals over the half length, in [2, 256]; ``Nx * Nz <= 6144``.
         gumbel: integrate ``max(p - 1, 0)`` for the force (sub-ambient film carries no load) instead of ``p - 1``.
-            A plain gas bearing runs full film: the default False is the model of REFERENCE.md.
+            A plain gas bearing runs full film: the default False is the model of docs/model.md.
         xtol: Newton step tolerance on p/p0 (infinity norm).
         max_iter: most Newton iterations.
 
@@ -204,7 +204,7 @@ def plain_bearing_steady(Lambda: float | Array, x: float | Array, y: float | Arr
 
 def small_eccentricity_reference(Lambda: float | np.ndarray, L_over_D: float | np.ndarray
                                  ) -> tuple[np.ndarray | float, np.ndarray | float]:
-    """First-order (small eccentricity) closed form of the plain gas journal bearing (REFERENCE.md; Al-Bender,
+    """First-order (small eccentricity) closed form of the plain gas journal bearing (docs/model.md; Al-Bender,
     Air Bearings, Sect. 9.3), independent of the finite-difference solver:
 
     ``G = (pi/2) [i Lambda / (1 + i Lambda)] [1 - tanh(s L/D) / (s L/D)]``, ``s = sqrt(1 + i Lambda)``.
@@ -345,7 +345,7 @@ def whirl_force(Lambda: float | Array, nu: float | Array, eps: float | Array, ka
     simplified Newton with the exact Jacobian (``jax.jacfwd``).  The force is rotated into the frame of the
     journal and averaged over the last period.  Once the start transient has died out (the slowest pressure mode
     decays like ``exp(-kappa^2 pi^2 tau / 2)``, so integrate for ``tau >~ 20 / (kappa^2 pi^2)``) the force is
-    constant in that frame and, by REFERENCE.md, equals the steady force (``force_rt`` of
+    constant in that frame and, by docs/model.md, equals the steady force (``force_rt`` of
     :func:`plain_bearing_steady`) at the effective bearing number ``Lambda - 2 nu``; zero at ``nu = Lambda/2``.
     On a grid of ``Nx`` intervals the relation holds with ``Lambda - 2 nu / s``, ``s = sin(dth)/dth``,
     ``dth = 2 pi / Nx`` (the squeeze term is exact in time, the Couette term a central difference), i.e. with

@@ -246,7 +246,9 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
     Args:
         params: dimensionless system (``SystemSpec.nondim()``).
         omega: speed Omega_bar in (0, 50] (:data:`gfbjax.limits.SPEED`).
-        w: extra vertical specific load per bearing ``W/(p0 L D)`` in [0, 20].
+        w: extra vertical specific load per bearing ``W/(p0 L D)`` in [0, 20], beyond gravity and beyond the
+            system's own load (``SystemSpec.load``, carried in ``params.w_ext``); ``StaticResult.w`` is the total
+            extra specific load, both together.
         guess: a core state to start from, e.g. the equilibrium at a nearby speed, or at the load ``guess_w``.
         guess_w: the load at which ``guess`` is an equilibrium; the load is then ramped from ``guess_w`` to ``w``.
             Without ``guess``, or when the warm start fails, the load is ramped from zero from the centred,
@@ -260,6 +262,10 @@ def solve_equilibrium(params: Params, omega: float, w: float = 0.0, *, guess: Ar
         ``outcome == "contact"`` and the last converged (partially loaded) state.
     """
     omega, w, guess_w = _check_inputs(params, omega, w, guess_w)
+    # the system's own extra load (SystemSpec.load, in params.w_ext = 2 w) comes on top of ``w``: the solve ramps
+    # the total, so it is folded into w here and params.w_ext is set from it by with_load
+    w_sys = float(params.w_ext) / 2.0
+    w, guess_w = w + w_sys, (None if guess_w is None else guess_w + w_sys)
     params = params.traced()
     omega_a = jnp.asarray(float(omega))
     iters = 0

@@ -4,7 +4,7 @@ constant angular acceleration (Eq. 15b), paper Sect. 3.2.
 Both cases integrate :func:`gfbjax.model.runup_vector_field` ``f(tau, s, params, omega0, accel)``: with
 ``accel = 0`` it *is* Eq. (17) with Eq. (15a) (speed ``omega0``, unbalance phase ``omega0 tau``), so one compiled
 solver serves constant-speed runs and run-ups alike (a test checks the identity against
-:func:`gfbjax.model.forced_vector_field`).  All quantities are dimensionless (DESIGN.md): time ``tau = t / t*``,
+:func:`gfbjax.model.forced_vector_field`).  All quantities are dimensionless (docs/model.md): time ``tau = t / t*``,
 speed ``Omega_bar = Omega t*``, displacements over the clearance ``c``, acceleration ``a_bar = a t*^2``.
 
 Solver (chosen by measurement): diffrax ``Kvaerno5`` (L-stable ESDIRK, order 5(4)) with a PID step-size

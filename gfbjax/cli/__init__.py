@@ -8,8 +8,9 @@ Exit status: what the command returns (0 success, 1 when the computation ended e
 interrupted by SIGINT or SIGTERM (a continuation then writes the points it has).
 
 Process settings: :func:`main` is a program's entry point, so it sets what a program may: the XLA:CPU and OpenBLAS
-settings of :func:`gfbjax._process.configure_process` (where not set by the user) and matplotlib's non-interactive
-Agg backend for the figures the commands write (files only, no window).  The library itself (``import gfbjax``,
+settings of :func:`gfbjax._process.configure_process` (where not set by the user), JAX's persistent compilation
+cache (:func:`gfbjax._process.enable_compilation_cache`: ``~/.cache/gfbjax/jax``, or ``$GFBJAX_CACHE_DIR``, ``off``
+to disable) and matplotlib's non-interactive Agg backend for the figures the commands write (files only, no window).  The library itself (``import gfbjax``,
 the plotting modules) leaves the matplotlib backend alone.
 """
 
@@ -71,14 +72,16 @@ def _configure_program() -> None:
     """The process settings of a command-line run (module docstring)."""
     import matplotlib
 
-    from .._process import configure_process
+    from .._process import configure_process, enable_compilation_cache
 
     configure_process()
+    enable_compilation_cache()
     matplotlib.use("Agg")  # figures are written to files; no display is needed or opened
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    from ..cont import CheckpointError
     from ..params import ParameterError
 
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -98,7 +101,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = _terminate_as_interrupt()
     try:
         return int(func(args) or 0)
-    except ParameterError as exc:
+    except (ParameterError, CheckpointError) as exc:  # bad input, or a checkpoint folder that cannot be resumed
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -6,7 +6,8 @@ The engine knows nothing about bearings: it works for any autonomous ``f(x, lam,
 Layers, bottom up:
 
 * problems and results: :class:`CycleProblem`, :class:`EquilibriumProblem`; :class:`Branch` (struct of arrays,
-  npz + JSON, xarray/netCDF; :class:`BranchFileError` for a file that cannot be read), :class:`SpecialPoint`,
+  npz + JSON, xarray/netCDF; :class:`BranchFileError` for a file that cannot be read), :class:`Checkpoint`
+  (a folder a continuation appends every step to and resumes from; :class:`CheckpointError`), :class:`SpecialPoint`,
   :class:`Outcome` (one vocabulary for every solver and branch end);
 * collocation: :class:`Scheme`, :class:`Orbit`, constraints (Gauss collocation, condensation of parameters);
 * linear solvers behind one protocol (:class:`DenseCondensation`, :class:`SparseSweep`): solve, transposed solve,
@@ -22,6 +23,7 @@ Precision: the engine expects ``jax_enable_x64`` (``import gfbjax`` turns it on)
 """
 from ._batch import BatchNewtonResult as BatchNewtonResult, batched_newton as batched_newton
 from ._branch import Branch as Branch, BranchFileError as BranchFileError, PointRecord as PointRecord
+from ._checkpoint import Checkpoint as Checkpoint, CheckpointError as CheckpointError
 from ._collocation import (Constraint as Constraint, Orbit as Orbit, Scheme as Scheme,
                            dense_newton_step as dense_newton_step, natural_constraint as natural_constraint,
                            orbit_from_function as orbit_from_function, orbit_from_samples as orbit_from_samples,
@@ -46,7 +48,7 @@ from ._linear import (DenseCondensation as DenseCondensation, Linearisation as L
                       LinearSolver as LinearSolver, SPARSE_MIN_N as SPARSE_MIN_N, SparseSweep as SparseSweep)
 from ._newton import (LinearSolveError as LinearSolveError, NewtonSettings as NewtonSettings,
                       NewtonSolution as NewtonSolution, solve as newton_solve, solve_host as newton_solve_host)
-from ._problem import CycleProblem as CycleProblem, EquilibriumProblem as EquilibriumProblem
+from ._problem import CycleProblem as CycleProblem, EquilibriumProblem as EquilibriumProblem, Monitor as Monitor
 from ._results import Outcome as Outcome, SPECIAL_TYPES as SPECIAL_TYPES, SpecialPoint as SpecialPoint
 from ._settings import (CycleSettings as CycleSettings, EquilibriumSettings as EquilibriumSettings,
                         Natural as Natural, PseudoArclength as PseudoArclength)
@@ -54,7 +56,7 @@ from ._sparsity import (Coloring as Coloring, color_pattern as color_pattern, de
                         jacobian_values as jacobian_values)
 
 __all__ = [
-    "Arnoldi", "BatchNewtonResult", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Coloring", "Constraint", "CycleProblem",
+    "Arnoldi", "BatchNewtonResult", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
     "CycleSettings", "CycleStart",
     "DenseCondensation", "EquilibriumProblem", "EquilibriumSettings", "FloquetMethod", "HopfPoint",
     "LinearSolveError", "LinearSolver", "Linearisation", "Natural", "NewtonSettings", "NewtonSolution", "Orbit",

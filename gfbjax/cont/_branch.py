@@ -35,6 +35,11 @@ JSON sidecar, one object:
 - ``m`` (collocation degree, null for equilibria) and ``keys`` (the npz keys);
 - ``accuracy_tol``: the largest accepted distance of the trivial multiplier from +1 (cycles; null otherwise);
   points above it are flagged (:attr:`Branch.flagged`);
+- ``monitor``: null, or ``{"name", "minimum", "unit", "stop"}`` of the physical bound watched along the branch
+  (:class:`~._problem.Monitor`), whose value at every point is the npz array ``monitor`` (P,); points at or
+  below ``minimum`` are flagged;
+- ``mesh_tol``: null, or the largest accepted a-posteriori mesh error of a cycle (:mod:`._mesh`), whose value at
+  every point is the npz array ``mesh_error`` (P,); points above it are flagged;
 - ``meta``: a JSON object the caller attached (:attr:`Branch.meta`).  The engine writes none of it; the bearing
   analyses (:mod:`gfbjax.analyses.cycles`) record there the system (SI spec with its conventions, dimensionless
   groups), the grid, the state layout and the rpm conversion.
@@ -97,6 +102,8 @@ class PointRecord:
     ds: float
     tangent_lam: float
     state: dict[str, np.ndarray] | None = None
+    monitor: float = math.nan
+    mesh_error: float = math.nan
 
 
 @dataclass
@@ -133,26 +140,38 @@ class Branch:
     units: dict[str, str] = field(default_factory=dict)
     meta: dict[str, Any] = field(default_factory=dict)
     accuracy_tol: float | None = None
+    monitor: np.ndarray | None = None
+    monitor_info: dict[str, Any] | None = None
+    mesh_error: np.ndarray | None = None
+    mesh_tol: float | None = None
 
     def __len__(self) -> int:
         return len(self.lam)
 
     @property
     def flagged(self) -> np.ndarray:
-        """(P,) bool: points whose trivial multiplier is farther than ``accuracy_tol`` from +1.  Their multipliers
-        are not accurate to that level, so their stability labels cannot be trusted (refine the mesh).  All False
-        for equilibria and for branches without a tolerance."""
-        if self.accuracy_tol is None:
-            return np.zeros(len(self), bool)
-        err = np.asarray(self.trivial_error, float)
-        return np.isfinite(err) & (err > self.accuracy_tol)
+        """(P,) bool: points whose trivial multiplier is farther than ``accuracy_tol`` from +1 (their multipliers
+        are not accurate to that level, so their stability labels cannot be trusted: refine the mesh), and points
+        whose monitored bound is violated (``monitor <= monitor_info["minimum"]``: outside the model's validity,
+        e.g. a closed film), and cycles whose estimated mesh error exceeds ``mesh_tol`` (the orbit, its period and
+        multipliers are not resolved to that level).  All False for a branch with none of these."""
+        out = np.zeros(len(self), bool)
+        if self.accuracy_tol is not None:
+            err = np.asarray(self.trivial_error, float)
+            out |= np.isfinite(err) & (err > self.accuracy_tol)
+        if self.monitor is not None and self.monitor_info is not None:
+            out |= np.asarray(self.monitor, float) <= float(self.monitor_info["minimum"])
+        if self.mesh_error is not None and self.mesh_tol is not None:
+            out |= np.asarray(self.mesh_error, float) > self.mesh_tol
+        return out
 
     @classmethod
     def from_points(cls, kind: str, components: list[int], points: list[PointRecord],
                     special: list[SpecialPoint], special_states: list[dict[str, np.ndarray]],
                     outcome: Outcome, message: str = "", m: int | None = None,
                     shared_state: dict[str, np.ndarray] | None = None,
-                    accuracy_tol: float | None = None) -> "Branch":
+                    accuracy_tol: float | None = None, monitor_info: dict[str, Any] | None = None,
+                    mesh_tol: float | None = None) -> "Branch":
         def stack(name, dtype=float, shape=(0,)):
             vals = [getattr(p, name) for p in points]
             return np.array(vals, dtype=dtype) if vals else np.zeros(shape, dtype)
@@ -169,7 +188,9 @@ class Branch:
                    stack("multipliers", complex, (0, nmu)), stack("stable", bool),
                    stack("trivial_error"), stack("newton_iterations", int), stack("ds"),
                    stack("tangent_lam"), list(special), Outcome(outcome), message, states, list(special_states), m,
-                   accuracy_tol=accuracy_tol)
+                   accuracy_tol=accuracy_tol, monitor=None if monitor_info is None else stack("monitor"),
+                   monitor_info=monitor_info, mesh_error=None if mesh_tol is None else stack("mesh_error"),
+                   mesh_tol=mesh_tol)
 
     def special_of(self, kind: str) -> list[SpecialPoint]:
         return [s for s in self.special if s.type == kind]
@@ -187,12 +208,16 @@ class Branch:
             arrays.update({f"state_{k}": v for k, v in self.states.items()})
         for i, st in enumerate(self.special_states):
             arrays.update({f"special{i}_{k}": v for k, v in st.items()})
+        if self.monitor is not None:
+            arrays["monitor"] = np.asarray(self.monitor, float)
+        if self.mesh_error is not None:
+            arrays["mesh_error"] = np.asarray(self.mesh_error, float)
         head = {"format": FORMAT, "version": FORMAT_VERSION, "kind": self.kind, "points": len(self),
                 "components": [int(c) for c in self.components],
                 "component_names": None if self.component_names is None else list(self.component_names),
                 "units": dict(self.units), "outcome": str(self.outcome), "message": self.message, "m": self.m,
                 "special": [s.to_json() for s in self.special], "keys": sorted(arrays), "meta": self.meta,
-                "accuracy_tol": self.accuracy_tol}
+                "accuracy_tol": self.accuracy_tol, "monitor": self.monitor_info, "mesh_tol": self.mesh_tol}
         try:  # serialise before writing: a meta that is not JSON-able leaves no half-written pair behind
             text = json.dumps(head, indent=1, default=_json_default)
         except (TypeError, ValueError) as exc:
@@ -272,8 +297,18 @@ class Branch:
             "ds": var(("point",), self.ds, "ds"),
             "tangent_lam": var(("point",), self.tangent_lam, "tangent_lam"),
             "flagged": (("point",), np.asarray(self.flagged, bool),
-                        {"long_name": "trivial multiplier farther than accuracy_tol from +1"}),
+                        {"long_name": "trivial multiplier farther than accuracy_tol from +1, or monitor at or "
+                                      "below its minimum"}),
         }
+        if self.mesh_error is not None:
+            data["mesh_error"] = (("point",), np.asarray(self.mesh_error, float),
+                                  {"long_name": "estimated collocation mesh error, relative to 1 + max|x|",
+                                   "mesh_tol": float(self.mesh_tol)})
+        if self.monitor is not None and self.monitor_info is not None:
+            info = self.monitor_info
+            data["monitor"] = (("point",), np.asarray(self.monitor, float),
+                               {"long_name": f"{info['name']} (minimum {info['minimum']:g})",
+                                **({"units": info["unit"]} if info.get("unit") else {})})
         lam_attrs = {"long_name": "continuation parameter"}
         if "lam" in self.units:
             lam_attrs["units"] = self.units["lam"]
@@ -462,6 +497,33 @@ def _accuracy_tol(head: dict[str, Any], js: Path) -> float | None:
     return None if tol is None else float(tol)
 
 
+def _monitor(head: dict[str, Any], data: dict[str, np.ndarray], P: int, npz: Path, js: Path) -> dict[str, Any]:
+    info = head.get("monitor")
+    if info is None:
+        return {}
+    if not (isinstance(info, dict) and isinstance(info.get("name"), str)
+            and isinstance(info.get("minimum"), (int, float)) and not isinstance(info.get("minimum"), bool)):
+        raise BranchFileError(f"{js}: 'monitor' must be null or an object with 'name' and a numeric 'minimum', "
+                              f"got {info!r:.80}")
+    values = data.get("monitor")
+    if values is None or values.shape != (P,):
+        raise BranchFileError(f"{npz}: {js.name} names a monitor but the array 'monitor' is absent or not "
+                              f"({P},)")
+    return {"monitor": values.astype(float), "monitor_info": dict(info)}
+
+
+def _mesh_error(head: dict[str, Any], data: dict[str, np.ndarray], P: int, npz: Path, js: Path) -> dict[str, Any]:
+    tol = head.get("mesh_tol")
+    if tol is None:
+        return {}
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
+        raise BranchFileError(f"{js}: 'mesh_tol' must be a positive number or null, got {tol!r}")
+    values = data.get("mesh_error")
+    if values is None or values.shape != (P,):
+        raise BranchFileError(f"{npz}: {js.name} gives mesh_tol but the array 'mesh_error' is absent or not ({P},)")
+    return {"mesh_error": values.astype(float), "mesh_tol": float(tol)}
+
+
 def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray], npz: Path, js: Path) -> Branch:
     version = head["version"]
     kind = _get(head, "kind", str, js, f"one of {KINDS}")
@@ -551,4 +613,5 @@ def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray],
     return cls(kind, list(components), *(arrays[k] for k in ARRAY_KEYS), special=special, outcome=outcome,
                message=message, states=states, special_states=sp_states, m=m,
                component_names=None if names is None else list(names), units=dict(units), meta=meta,
-               accuracy_tol=_accuracy_tol(head, js))
+               accuracy_tol=_accuracy_tol(head, js), **_monitor(head, data, P, npz, js),
+               **_mesh_error(head, data, P, npz, js))

@@ -18,9 +18,11 @@ import numpy as np
 
 from . import _collocation as col
 from ._branch import Branch, PointRecord
+from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import classify, cycle_test_functions, detect, double_orbit_pd
 from ._floquet import FloquetMethod, nontrivial, trivial_error
+from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
@@ -76,7 +78,9 @@ def start_from_hopf(hopf: Any, settings: CycleSettings) -> CycleStart:
 
 def _orbit_of(st: dict[str, np.ndarray], index: int | None = None) -> col.Orbit:
     pick = (lambda a: a[index]) if index is not None else (lambda a: a)
-    return col.Orbit(jnp.asarray(st["mesh"]), jnp.asarray(pick(st["xm"])), jnp.asarray(pick(st["xi"])),
+    mesh = np.asarray(st["mesh"])
+    mesh = mesh[index] if index is not None and mesh.ndim == 2 else mesh  # per point (adapted) or shared (older)
+    return col.Orbit(jnp.asarray(mesh), jnp.asarray(pick(st["xm"])), jnp.asarray(pick(st["xi"])),
                      jnp.asarray(pick(st["T"])), jnp.asarray(pick(st["lam"])))
 
 
@@ -184,6 +188,13 @@ def _norm_and_extrema(orbit: col.Orbit, scheme: col.Scheme, comps: jax.Array):
     return col.l2_norm(orbit, scheme), jnp.max(U, axis=(0, 1)), jnp.min(U, axis=(0, 1))
 
 
+@partial(jax.jit, static_argnums=(0,))
+def _monitor_min(fn: Callable, orbit: col.Orbit, args: Any) -> jax.Array:
+    """Smallest value of a monitor over every collocation node of the orbit."""
+    X = orbit.nodes().reshape(-1, orbit.n)
+    return jnp.min(jax.vmap(lambda x: fn(x, orbit.lam, args))(X))
+
+
 def _orbit_state(orbit: col.Orbit) -> dict[str, np.ndarray]:
     return {"mesh": np.asarray(orbit.mesh), "xm": np.asarray(orbit.xm), "xi": np.asarray(orbit.xi),
             "T": np.asarray(orbit.T), "lam": np.asarray(orbit.lam)}
@@ -199,6 +210,7 @@ class CycleCurve(Curve):
         self.solver = bind_solver(problem, scheme, settings)  # a bad choice raises here, before any work
         self.floquet = settings.floquet
         self.memo: dict[str, Any] = {}
+        self.monitor = problem.monitor
         self.components = problem.components
         self._comps = jnp.asarray(self.components)
 
@@ -224,39 +236,84 @@ class CycleCurve(Curve):
         return self.solver.correct(pred, con, self.settings.newton)
 
     def analyse(self, X, lin, tangent):
-        return analyse(self.problem, lin, self.floquet, self.memo)
+        an = analyse(self.problem, lin, self.floquet, self.memo)
+        if self.monitor is not None:
+            an["monitor"] = float(_monitor_min(self.monitor.fn, X, self.problem.args))
+        return an
 
     def tests(self, analysis, tangent_lam):
-        return cycle_test_functions(analysis["spectrum"], self.problem.n_trivial, tangent_lam)
+        out = cycle_test_functions(analysis["spectrum"], self.problem.n_trivial, tangent_lam)
+        if self.monitor is not None:
+            out["MONITOR"] = analysis["monitor"] - float(self.monitor.minimum)
+        return out
 
     def events(self, prev, cur, kinds):
         return detect(prev, cur, kinds)
 
     def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
-        state = None
-        if self.settings.save_states:
-            state = {k: v for k, v in _orbit_state(X).items() if k != "mesh"}
+        state = _orbit_state(X) if self.settings.save_states else None
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
-                           an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state)
+                           an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state,
+                           an.get("monitor", float("nan")), error_estimate(X, self.scheme))
 
     def state(self, X):
         return _orbit_state(X)
+
+    def from_state(self, state):
+        return col.Orbit(*(jnp.asarray(state[k], float) for k in ("mesh", "xm", "xi", "T", "lam")))
 
     def special(self, kind, X, an, located=True):
         c = classify(kind, an["spectrum"], self.problem.n_trivial)
         return None if c is None else {"period": float(X.T), **c}
 
+    def adapt(self, X, tau, X_prev, tests, count):
+        """Every ``settings.adapt`` points: the orbit corrected on an equidistributed mesh, its tangent there
+        (oriented like ``tau``), the previous point carried over, and the fold test (the tangent's lam
+        component) of the new discretisation, so that the next step compares like with like: a stale value
+        would let the small change of the discrete branch near a fold show as spurious folds.  Unchanged when
+        the correction fails."""
+        every = self.settings.adapt
+        if tests is not None:  # the typical size of the fold test, with a fading memory
+            self._lpc_scale = max(0.9 * getattr(self, "_lpc_scale", 0.0), abs(tests["LPC"]))
+        if not every or count % every:
+            return X, tau, X_prev, tests
+        if tests is not None and abs(tests["LPC"]) < 0.2 * self._lpc_scale:
+            return X, tau, X_prev, tests  # the branch is turning (near a fold): keep the mesh until it has
+        err = interval_errors(X, self.scheme)
+        # re-mesh only when the errors have become unequal (the largest twice the mean): a mesh that still fits
+        # is kept, so that near folds, where the orbit hardly changes, the discretisation stays the same
+        if np.max(err) <= 2.0 * np.mean(err):
+            return X, tau, X_prev, tests
+        mesh = equidistributed_mesh(X, self.scheme)
+        Xr = remesh(X, self.scheme, mesh)
+        sol, _ = self.correct(Xr, col.natural_constraint(Xr, X.lam))
+        if not sol.converged:
+            return X, tau, X_prev, tests
+        t = sol.aux
+        if self.inner(t, remesh(tau, self.scheme, mesh)) < 0:
+            t = t.scale(-1.0)
+        if tests is not None:
+            if np.sign(float(t.lam)) != np.sign(tests["LPC"]):
+                return X, tau, X_prev, tests  # at a fold: the new mesh would hide its crossing; adapt later
+            tests = {**tests, "LPC": float(t.lam)}
+        return sol.x, t, None if X_prev is None else remesh(X_prev, self.scheme, mesh), tests
+
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
-        shared = {"mesh": self._mesh} if settings.save_states else None
         return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,
-                                  m=self.scheme.m, shared_state=shared, accuracy_tol=settings.trivial_tol)
+                                  m=self.scheme.m, accuracy_tol=settings.trivial_tol,
+                                  monitor_info=None if self.monitor is None else self.monitor.describe(),
+                                  mesh_tol=settings.mesh_tol)
 
 
 def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: CycleStart, *,
                     callback: Optional[Callable[[int, PointRecord], Any]] = None,
-                    progress: bool = False) -> Branch:
+                    progress: bool = False, checkpoint: Any = None) -> Branch:
     """Continue a branch of periodic orbits of ``problem`` from ``start`` (see :mod:`._driver`).
+
+    ``checkpoint``: a folder (or :class:`~._checkpoint.Checkpoint`) that every accepted step is appended to; a
+    call with a folder that holds steps of the same continuation resumes after the last one (``start`` is then
+    only used for its shapes) or, if that branch had ended, returns it as stored.
 
     Returns a :class:`Branch` (points so far and the :class:`Outcome`, whatever ended the continuation).
     Raises ``ValueError`` before any work for inputs that do not fit together (:func:`check_cycle_inputs`, a
@@ -273,5 +330,8 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
     check_cycle_inputs(problem, start.orbit, settings)
     scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1)
     curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
+    ck = as_checkpoint(checkpoint, n=problem.n, start=start.label,
+                       problem=fingerprint(problem.f, problem.args, problem.n_trivial),
+                       start_data=fingerprint(start.orbit, start.tangent))
     return continue_curve(curve, settings, start.orbit, start.tangent, callback=callback, progress=progress,
-                          desc="cycles")
+                          desc="cycles", checkpoint=ck)

@@ -10,13 +10,22 @@ One step from a converged point :math:`X_k` with unit tangent :math:`\tau_k`:
 
 1. predict :math:`X^{(0)}` (algorithm) and correct with Newton (:mod:`._newton`);
 2. a failed correction halves ds; the branch ends with ``STEP_TOO_SMALL`` below ``ds_min``;
-3. analyse the new point, evaluate the test functions, and for each event between the two points localise it:
+3. a tangent that turned by more than ``max_angle`` from the last one halves ds and retries (a jump to another
+   branch, or a bend the step does not resolve);
+4. analyse the new point, evaluate the test functions, and for each event between the two points localise it:
    the Illinois regula falsi in the arclength ``s`` from the left point, each evaluation a full correction at
-   ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual;
-4. record, call the callback; grow ds after a fast correction.
+   ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual.  An event that
+   cannot be located halves ds and retries the step (up to ``event_refine`` times): a corrector that jumped to
+   another branch changes the sign of a test function without a zero between, and so does a test function the
+   step does not resolve; a shorter step either removes the spurious event or locates the real one;
+5. record, call the callback; grow ds after a fast correction.
 
 A step that reaches or crosses ``lam_min``/``lam_max`` is replaced by a correction at lam = the bound (from the
 secant): the last point lies on the bound, and no point or event beyond it is recorded (``REACHED_END``).
+
+With a :class:`~._checkpoint.Checkpoint`, every accepted step is appended to a folder, together with the driver's
+state after it (point, previous point, tangent, test functions, next ds); a later call with the same folder resumes
+from there and gives the same branch as an uninterrupted run.
 
 Whatever ends the branch, the points computed so far are returned in a :class:`~._branch.Branch` with its
 :class:`~._results.Outcome`.  KeyboardInterrupt (and SIGTERM, where the caller maps it to KeyboardInterrupt) ends
@@ -28,11 +37,13 @@ from __future__ import annotations
 
 import abc
 import math
+from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
 import numpy as np
 
 from ._branch import Branch, PointRecord
+from ._checkpoint import Checkpoint
 from ._newton import LinearSolveError
 from ._results import Outcome, SpecialPoint
 
@@ -43,6 +54,7 @@ class Curve(abc.ABC):
     """What a branch is made of; implemented for cycles (:mod:`._cycles`) and equilibria (:mod:`._equilibria`)."""
 
     kind: str  # "cycles" | "equilibria"
+    monitor: Any = None  # the problem's Monitor (a physical bound); its value is the test "MONITOR" (value - min)
 
     # ---- vector space of the points (X = unknowns including lam)
     @abc.abstractmethod
@@ -87,6 +99,15 @@ class Curve(abc.ABC):
     def state(self, X: Any) -> dict[str, np.ndarray]: ...
 
     @abc.abstractmethod
+    def from_state(self, state: dict[str, np.ndarray]) -> Any:
+        """The point (or tangent) whose :meth:`state` is ``state`` (for resuming from a checkpoint)."""
+
+    def adapt(self, X: Any, tau: Any, X_prev: Any, tests: dict | None, count: int) -> tuple[Any, Any, Any, Any]:
+        """After the ``count``-th recorded point: the point, tangent, previous point and test functions on a
+        better discretisation (cycles: an adapted mesh); unchanged by default."""
+        return X, tau, X_prev, tests
+
+    @abc.abstractmethod
     def special(self, kind: str, X: Any, analysis: dict[str, Any], located: bool = True) -> dict[str, Any] | None:
         """Type-specific fields of a special point (``period``, ``angle``, ``omega``), or None when the sign change
         of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
@@ -99,7 +120,8 @@ class Curve(abc.ABC):
         return None
 
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
-        return Branch.from_points(self.kind, self.components, points, special, special_states, outcome, message)
+        return Branch.from_points(self.kind, self.components, points, special, special_states, outcome, message,
+                                  monitor_info=None if self.monitor is None else self.monitor.describe())
 
     components: list[int]  # recorded state components (their max/min over a cycle are stored)
 
@@ -155,18 +177,29 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
 class _Run:
     """The mutable record of one continuation (points, special points, their states)."""
 
-    def __init__(self, curve: Curve, settings: Any, callback, bar):
+    def __init__(self, curve: Curve, settings: Any, callback, bar, checkpoint: Checkpoint | None = None):
         self.curve, self.s, self.callback, self.bar = curve, settings, callback, bar
+        self.checkpoint = checkpoint
         self.points: list[PointRecord] = []
         self.special: list[SpecialPoint] = []
         self.special_states: list[dict[str, np.ndarray]] = []
 
     def add_point(self, rec: PointRecord) -> bool:
-        """Record an accepted point; False when the callback asks to stop."""
+        """Record an accepted point and call the callback; False when the callback asks to stop."""
         self.points.append(rec)
         if self.bar is not None:
             self.bar.update(1)
         return not (self.callback is not None and self.callback(len(self.points) - 1, rec) is False)
+
+    def accept(self, rec: PointRecord, X: Any, X_prev: Any, tau: Any, tests: dict | None, ds: float) -> bool:
+        """End of an accepted step: record its point, append the step with the state that the next step starts
+        from to the checkpoint (before the callback, so that an interrupting callback loses nothing), then call
+        the callback; False when it asks to stop."""
+        if self.checkpoint is not None:
+            c = self.curve
+            self.checkpoint.append(self.points + [rec], self.special, self.special_states, c.state(X),
+                                   None if X_prev is None else c.state(X_prev), c.state(tau), tests, ds)
+        return self.add_point(rec)
 
     def tangent_lam(self, tau) -> float:
         return float(self.curve.lam(tau))
@@ -174,7 +207,7 @@ class _Run:
 
 def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
                    callback: Optional[Callable[[int, PointRecord], Any]] = None, progress: bool = False,
-                   desc: str = "branch") -> Branch:
+                   desc: str = "branch", checkpoint: Checkpoint | None = None) -> Branch:
     """Continue ``curve`` from ``X0``.
 
     ``tau0=None``: ``X0`` is a guess, corrected at fixed lam and recorded; the first tangent points towards
@@ -184,14 +217,24 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     largest component positive).  Otherwise ``X0`` is a bifurcation point (Hopf, PD) and ``tau0``
     the direction of the emanating branch (``X0`` itself is not recorded).  ``callback(index, record)`` is called
     after each accepted point (return ``False`` to stop).
+
+    ``checkpoint``: every accepted step is appended to this folder (:mod:`._checkpoint`).  If it already holds
+    steps of the same continuation, the branch resumes after the last one (``X0``/``tau0`` are then not used, and
+    ``callback`` first sees the last restored point); if that branch had ended, it is returned as stored.
+    :class:`~._checkpoint.CheckpointError` when the folder belongs to another continuation.
     """
+    restored = None if checkpoint is None else checkpoint.open(curve.kind, settings)
+    if restored is not None and restored.outcome is not None:
+        return curve.branch(restored.points, restored.special, restored.special_states, restored.outcome,
+                            restored.message, settings)
     bar = None
     if progress:
         from tqdm.auto import tqdm
         bar = tqdm(total=settings.max_points, desc=desc)
-    run = _Run(curve, settings, callback, bar)
+    run = _Run(curve, settings, callback, bar, checkpoint)
+    outcome, message = Outcome.INTERRUPTED, "interrupted; the points computed so far are kept"
     try:
-        outcome, message = _loop(run, X0, tau0)
+        outcome, message = _loop(run, X0, tau0, restored)
     except KeyboardInterrupt:
         outcome, message = Outcome.INTERRUPTED, "interrupted; the points computed so far are kept"
     except LinearSolveError as exc:  # e.g. Arnoldi without convergence: a numerical failure, not a bug
@@ -199,13 +242,36 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     finally:
         if bar is not None:
             bar.close()
+        if checkpoint is not None:
+            checkpoint.finish(outcome, message)
     return curve.branch(run.points, run.special, run.special_states, outcome, message, settings)
 
 
-def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
+def _resume(run: _Run, restored: Any) -> tuple[Any, Any, Any, Any, float] | None:
+    """Put the restored rows into ``run`` (the callback sees the last one, so that progress displays start
+    there); the driver state, or None when the callback stops."""
+    c = run.curve
+    run.special, run.special_states = list(restored.special), list(restored.special_states)
+    run.points = list(restored.points[:-1])
+    if run.bar is not None:
+        run.bar.update(len(run.points))
+    if not run.add_point(restored.points[-1]):
+        return None
+    X_prev = None if restored.X_prev is None else c.from_state(restored.X_prev)
+    return c.from_state(restored.X), X_prev, c.from_state(restored.tau), restored.tests, restored.ds
+
+
+def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome, str]:
     c, s = run.curve, run.s
     algo = s.algorithm
-    if tau0 is None:
+    X_prev = None
+    ds = s.ds
+    if restored is not None:
+        state = _resume(run, restored)
+        if state is None:
+            return Outcome.STOPPED, "stopped by the callback"
+        X, X_prev, tau, tests, ds = state
+    elif tau0 is None:
         sol, lin = c.correct(X0, c.natural_constraint(X0, c.lam(X0)))
         if sol.converged:
             X, tau = sol.x, c.scale(sol.aux, float(s.direction))
@@ -220,12 +286,13 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
             X, tau = sol.x, c.scale(sol.aux, float(s.direction))
         an = c.analyse(X, lin, tau)
         tests = c.tests(an, run.tangent_lam(tau))
-        if not run.add_point(c.record(X, an, int(sol.iterations), 0.0, run.tangent_lam(tau))):
+        if _violates(c, tests):
+            return _monitor_end(run, X, None, 0.0, None, tests, X, an)
+        if not run.accept(c.record(X, an, int(sol.iterations), 0.0, run.tangent_lam(tau)), X, None, tau, tests, ds):
             return Outcome.STOPPED, "stopped by the callback"
     else:
         X, tau, tests = X0, tau0, None
-    X_prev = None
-    ds = s.ds
+    refined = 0  # halvings of the current step for an event that could not be located
     while len(run.points) < s.max_points:
         pred, con, ds, direction = algo.predict(c, X, X_prev, tau, ds, s.direction, s.dlam_max)
         sol, lin = c.correct(pred, con)
@@ -238,6 +305,9 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
         Xn, tau_n = sol.x, sol.aux
         if direction is None:  # natural parameter: orient the corrector's tangent by the stepping direction
             tau_n = c.scale(tau_n, float(s.direction))
+        if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
+            ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
+            continue
         bound = _crossed_bound(s, c.lam(X), c.lam(Xn))
         if bound is not None:  # place the last point on the bound: nothing is recorded or detected beyond it
             placed = _on_bound(c, X, Xn, tau, bound)
@@ -248,18 +318,48 @@ def _loop(run: _Run, X0: Any, tau0: Any) -> tuple[Outcome, str]:
             Xn = sol.x
         an_n = c.analyse(Xn, lin, tau_n)
         tests_n = c.tests(an_n, run.tangent_lam(tau_n))
+        if _violates(c, tests_n):
+            # the events of this step are not sought: the ones before the crossing are lost (rare; the steps
+            # are short where a cycle grows into contact)
+            return _monitor_end(run, X, direction, ds, tests, tests_n, Xn, an_n)
+        found = []
         if tests is not None and s.detect:
-            for kind in c.events(tests, tests_n, s.detect):
-                _event(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
-        if not run.add_point(c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))):
-            return Outcome.STOPPED, "stopped by the callback"
+            found = [f for f in (_localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
+                                 for kind in c.events(tests, tests_n, s.detect)) if f is not None]
+        if (any(not f.located for f in found) and s.locate and direction is not None and bound is None
+                and refined < s.event_refine and 0.5 * ds >= s.ds_min):
+            # an event that cannot be located: the step may have jumped to another branch (the test functions
+            # then change sign without passing through zero), or the test function is not resolved; a shorter
+            # step tells the two apart
+            ds, refined = 0.5 * ds, refined + 1
+            continue
+        for f in found:
+            _insert(run, f)
+        refined = 0
+        rec = c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
+        X, tau, X_prev, tests = c.adapt(X, tau, X_prev, tests, len(run.points) + 1)
+        if int(sol.iterations) <= s.fast_iter:
+            ds = min(ds * s.grow, s.ds_max)
+        if not run.accept(rec, X, X_prev, tau, tests, ds):
+            return Outcome.STOPPED, "stopped by the callback"
         if bound is not None:
             return Outcome.REACHED_END, f"lam = {bound:.6g} reached (bounds [lam_min, lam_max] = [{s.lam_min:g}, " \
                                         f"{s.lam_max:g}])"
-        if int(sol.iterations) <= s.fast_iter:
-            ds = min(ds * s.grow, s.ds_max)
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
+
+
+def _violates(c: Curve, tests: dict) -> bool:
+    """A stopping monitor at or below its minimum."""
+    return c.monitor is not None and c.monitor.stop and not tests["MONITOR"] > 0.0
+
+
+def _angle(c: Curve, a: Any, b: Any) -> float:
+    """Angle [rad] between two tangents in the curve's inner product."""
+    den = math.sqrt(max(c.inner(a, a) * c.inner(b, b), 0.0))
+    if not den > 0.0:
+        return 0.0
+    return math.acos(min(1.0, max(-1.0, c.inner(a, b) / den)))
 
 
 def _crossed_bound(s: Any, lam0: float, lam1: float) -> float | None:
@@ -288,11 +388,38 @@ def _on_bound(c: Curve, X: Any, Xn: Any, tau: Any, bound: float):
     return sol, lin, t
 
 
-def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
-           an_n: dict) -> None:
-    """Localise ``kind`` between X (left) and Xn and insert the special point (located: as a new row)."""
+@dataclass
+class _Found:
+    """An event of one step, localised (or not) but not yet inserted in the branch."""
+
+    kind: str
+    point: Any
+    analysis: dict
+    located: bool
+    residual: float  # NaN: not bracketed (the point after the step stands for it)
+    extra: dict
+    iterations: int = 0
+    s: float = math.nan
+    tangent_lam: float = math.nan
+
+
+def _localise(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
+              an_n: dict) -> _Found | None:
+    """Localise ``kind`` between X (left) and Xn; None when the sign change is no bifurcation (the curve's
+    :meth:`Curve.special` says so, e.g. a real collision of multipliers)."""
+    found = _bracket(run, kind, X, tau, ds, tests, tests_n, Xn, an_n)
+    extra = run.curve.special(kind, found.point, found.analysis, found.located)
+    if extra is None:
+        return None
+    found.extra = extra
+    return found
+
+
+def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
+             an_n: dict) -> _Found:
+    """Drive the test function ``kind`` to zero between X (left) and Xn (regula falsi in the arclength)."""
     c, s = run.curve, run.s
-    point, an, located, residual = Xn, an_n, False, math.nan
+    found = _Found(kind, Xn, an_n, False, math.nan, {})
     if s.locate and tau is not None:
         def g(sv):
             pred = c.add(X, c.scale(tau, sv))
@@ -306,15 +433,31 @@ def _event(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
         sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol)
         if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
             sol, an, tl = payload
-            point, residual = sol.x, float(val)
-        located = bool(located and payload is not None)
-    extra = c.special(kind, point, an, located)
-    if extra is None:  # the test function changed sign, but not at a bifurcation (module docstring of the curve)
-        return
-    if np.isfinite(residual):  # a point of the localisation: inserted as a row of the branch
-        run.points.append(c.record(point, an, int(sol.iterations), sv, tl))
-    run.special_states.append(c.state(point))
-    run.special.append(SpecialPoint(type=kind, lam=float(c.lam(point)),
-                                    index=len(run.points) - 1 if np.isfinite(residual) else len(run.points),
-                                    spectrum=np.asarray(an["spectrum"]), located=bool(located), residual=residual,
-                                    state=len(run.special_states) - 1, **extra))
+            found = _Found(kind, sol.x, an, bool(located), float(val), {}, int(sol.iterations), sv, tl)
+    return found
+
+
+def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tests_n: dict, Xn: Any,
+                 an_n: dict) -> tuple[Outcome, str]:
+    """The branch crossed its monitor's bound: record the located crossing as its last point and end."""
+    c, m = run.curve, run.curve.monitor
+    where = f"lam = {c.lam(X):.6g}" if tests is not None else "the start"
+    if tests is not None and tau is not None and run.s.locate:
+        f = _bracket(run, "MONITOR", X, tau, ds, tests, tests_n, Xn, an_n)
+        if np.isfinite(f.residual):
+            run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
+            where = f"lam = {c.lam(f.point):.6g}"
+    return Outcome.CONTACT, (f"{m.name} fell to its bound {m.minimum:g}{' ' + m.unit if m.unit else ''} at "
+                             f"{where}: beyond it the solutions leave the model's validity (Monitor.stop)")
+
+
+def _insert(run: _Run, f: _Found) -> None:
+    """Insert a special point (a bracketed one also as a new row of the branch)."""
+    c = run.curve
+    if np.isfinite(f.residual):
+        run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
+    run.special_states.append(c.state(f.point))
+    run.special.append(SpecialPoint(type=f.kind, lam=float(c.lam(f.point)),
+                                    index=len(run.points) - 1 if np.isfinite(f.residual) else len(run.points),
+                                    spectrum=np.asarray(f.analysis["spectrum"]), located=f.located,
+                                    residual=f.residual, state=len(run.special_states) - 1, **f.extra))

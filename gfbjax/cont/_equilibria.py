@@ -33,6 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._branch import Branch, PointRecord
+from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import signed_min
 from ._newton import NewtonSettings, solve as newton_solve
@@ -106,6 +107,7 @@ class EquilibriumCurve(Curve):
 
     def __init__(self, problem: EquilibriumProblem, settings: EquilibriumSettings):
         self.problem, self.settings = problem, settings
+        self.monitor = problem.monitor
         self.components = problem.components
         self._e_lam = np.zeros(problem.n + 1)
         self._e_lam[-1] = 1.0
@@ -148,10 +150,16 @@ class EquilibriumCurve(Curve):
         # the augmented Jacobian [f_x f_lam; tau^T] is regular at folds and singular at branch points: its
         # determinant's sign times its smallest singular value is continuous and changes sign there
         bp = float(np.linalg.slogdet(A)[0] * np.linalg.svd(A, compute_uv=False)[-1])
-        return {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan"), "bp": bp}
+        an = {"spectrum": ev, "stable": bool(np.all(ev.real < 0)), "trivial_error": float("nan"), "bp": bp}
+        if self.monitor is not None:
+            an["monitor"] = float(self.monitor.fn(jnp.asarray(y[:-1], float), float(y[-1]), self.problem.args))
+        return an
 
     def tests(self, an, tangent_lam):
-        return {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"]}
+        out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"]}
+        if self.monitor is not None:
+            out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
+        return out
 
     def events(self, prev, cur, kinds):
         found = [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
@@ -165,10 +173,13 @@ class EquilibriumCurve(Curve):
         c = self.components
         return PointRecord(float(y[-1]), float("nan"), float(np.linalg.norm(x)), x[c].copy(), x[c].copy(),
                            an["spectrum"], an["stable"], float("nan"), int(iterations), float(ds), float(tangent_lam),
-                           {"x": x.copy()})
+                           {"x": x.copy()}, an.get("monitor", float("nan")))
 
     def state(self, y):
         return {"x": np.asarray(y[:-1]).copy(), "lam": np.asarray(y[-1])}
+
+    def from_state(self, state):
+        return np.append(np.asarray(state["x"], float), float(state["lam"]))
 
     def special(self, kind, y, an, located=True):
         if kind == "FOLD" and abs(an["bp"]) <= 1e-6:
@@ -190,9 +201,11 @@ class EquilibriumCurve(Curve):
 
 def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettings, x0: Any, lam0: float,
                         *, callback: Optional[Callable[[int, PointRecord], Any]] = None,
-                        progress: bool = False) -> Branch:
+                        progress: bool = False, checkpoint: Any = None) -> Branch:
     """Continue equilibria from the guess (x0, lam0), first corrected at fixed lam.  The returned ``Branch``
-    stores the eigenvalues of f_x in ``multipliers`` (decreasing real part) and every state in ``states['x']``."""
+    stores the eigenvalues of f_x in ``multipliers`` (decreasing real part) and every state in ``states['x']``.
+    ``checkpoint``: a folder that every step is appended to and that a later call resumes from (as in
+    :func:`gfbjax.cont.continue_cycles`)."""
     if not isinstance(problem, EquilibriumProblem):
         raise ValueError(f"problem must be an EquilibriumProblem, got {type(problem).__name__}")
     if not isinstance(settings, EquilibriumSettings):
@@ -205,8 +218,10 @@ def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettin
         raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
                          f"shape ({problem.n},); it must return ({problem.n},)")
     y0 = np.append(x0, float(lam0))
+    ck = as_checkpoint(checkpoint, n=problem.n, problem=fingerprint(problem.f, problem.args),
+                       start_data=fingerprint(y0))
     return continue_curve(EquilibriumCurve(problem, settings), settings, y0, callback=callback, progress=progress,
-                          desc="equilibria")
+                          desc="equilibria", checkpoint=ck)
 
 
 def hopf_point(problem: EquilibriumProblem, branch: Branch, which: int = 0) -> HopfPoint:

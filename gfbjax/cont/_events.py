@@ -11,6 +11,9 @@ on one side of a line:
   many multipliers).  Its sign changes when a real multiplier crosses -1, and where a complex pair meets at -1 and
   splits into -r, -1/r (parametric resonance, e.g. the Mathieu tongues).  Two real multipliers below -1 that
   merge into a complex pair (or the reverse) leave it unchanged: no PD.
+* **BPC** (branch point of cycles): the same for :math:`\det(M - I)` over the non-trivial multipliers; its sign
+  changes when a real multiplier passes through +1.  At a fold of cycles a multiplier passes through +1 too, so a
+  step in which the LPC test also changes sign reports the fold only (:func:`detect`).
 * **NS** (Neimark-Sacker / torus): the same for :math:`\prod_{i<j} (\mu_i\mu_j - 1)/(|\mu_i\mu_j| + 1)` over
   the non-trivial pairs (the bialternate product of M): zero when a complex pair crosses the unit circle
   (:math:`\mu\bar\mu = 1`), unchanged when multipliers collide on the real axis.  It also vanishes for two real
@@ -73,12 +76,18 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
     pp = _pair_products(nt)
     return {"LPC": float(tangent_lam),
             "PD": signed_min((nt + 1.0) / (np.abs(nt) + 1.0)),
+            "BPC": signed_min((nt - 1.0) / (np.abs(nt) + 1.0)),
             "NS": signed_min((pp - 1.0) / (np.abs(pp) + 1.0))}
 
 
 def detect(prev: dict[str, float], cur: dict[str, float], kinds: tuple[str, ...]) -> list[str]:
-    """The test functions among ``kinds`` whose sign changed between two consecutive points."""
-    return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k]) and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+    """The test functions among ``kinds`` whose sign changed between two consecutive points (a BPC change in the
+    same step as an LPC one is the fold's own multiplier through +1: the fold only)."""
+    found = [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
+             and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+    if "BPC" in found and "LPC" in found:
+        found.remove("BPC")
+    return found
 
 
 def classify(kind: str, mu: np.ndarray, n_trivial: int) -> dict[str, Any] | None:

@@ -17,6 +17,42 @@ import jax
 import numpy as np
 
 
+@dataclass(frozen=True)
+class Monitor:
+    """A physical bound watched along a branch: ``fn(x, lam, args)`` (a scalar, pure JAX) must stay above
+    ``minimum`` at every state of every point (cycles: at every collocation node of the orbit).
+
+    Why: a branch can be a perfectly converged solution of the equations and still be outside the model's
+    validity, e.g. a bearing cycle whose gas film closes (h_min <= 0), where the Reynolds equation no longer holds.
+    ``stop=True``: the branch ends where the bound is crossed (the crossing is located and recorded as its last
+    point; outcome ``CONTACT``).  ``stop=False``: it goes on, and the points below the bound are flagged
+    (:attr:`Branch.flagged`).  Each point's value is kept in ``Branch.monitor``.  ``name`` and ``unit`` describe
+    it in results and messages.
+    """
+
+    name: str
+    fn: Callable[[jax.Array, jax.Array, Any], jax.Array] = field(compare=False)
+    minimum: float
+    stop: bool = True
+    unit: str = ""
+
+    def __post_init__(self) -> None:
+        if not callable(self.fn):
+            raise ValueError(f"Monitor.fn must be callable fn(x, lam, args), got {type(self.fn).__name__}")
+        if not (isinstance(self.minimum, numbers.Real) and np.isfinite(self.minimum)):
+            raise ValueError(f"Monitor.minimum must be a finite number, got {self.minimum!r}")
+
+
+    def describe(self) -> dict[str, Any]:
+        """What a branch records about its monitor (``Branch.monitor_info``, JSON-able)."""
+        return {"name": self.name, "minimum": float(self.minimum), "unit": self.unit, "stop": bool(self.stop)}
+
+
+def _check_monitor(problem: Any) -> None:
+    if problem.monitor is not None and not isinstance(problem.monitor, Monitor):
+        raise ValueError(f"monitor must be a Monitor or None, got {type(problem.monitor).__name__}")
+
+
 def _is_int(v: Any) -> bool:
     return isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_))
 
@@ -43,7 +79,8 @@ class CycleProblem:
     autonomous forcing oscillators).  record: state components whose max/min
     over the cycle are stored (None: all).  jac_sparsity: optional boolean
     (n, n) pattern of df/dx (True where an entry may be non-zero); with it,
-    large problems can use the sparse linear solver (``SparseSweep``).
+    large problems can use the sparse linear solver (``SparseSweep``).  monitor: an optional physical bound
+    watched at every point (:class:`Monitor`).
     """
 
     f: Callable[[jax.Array, jax.Array, Any], jax.Array]
@@ -52,9 +89,11 @@ class CycleProblem:
     n_trivial: int = 1
     record: Sequence[int] | None = None
     jac_sparsity: Any = field(default=None, compare=False, repr=False)
+    monitor: Monitor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         _check_common(self)
+        _check_monitor(self)
         if not (isinstance(self.n_trivial, int) and 1 <= self.n_trivial <= self.n):
             raise ValueError(f"n_trivial must be an int in [1, n={self.n}], got {self.n_trivial!r}")
         if self.jac_sparsity is not None and np.shape(self.jac_sparsity) != (self.n, self.n):
@@ -68,15 +107,17 @@ class CycleProblem:
 
 @dataclass(frozen=True)
 class EquilibriumProblem:
-    """Equilibria ``f(x, lam, args) = 0``."""
+    """Equilibria ``f(x, lam, args) = 0``; ``monitor``: an optional physical bound (:class:`Monitor`)."""
 
     f: Callable[[jax.Array, jax.Array, Any], jax.Array]
     n: int
     args: Any = None
     record: Sequence[int] | None = None
+    monitor: Monitor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         _check_common(self)
+        _check_monitor(self)
 
     @property
     def components(self) -> list[int]:

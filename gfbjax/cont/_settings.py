@@ -10,6 +10,7 @@ same way; ``None`` means the automatic choice.
 """
 from __future__ import annotations
 
+import math
 import numbers
 from dataclasses import dataclass
 from typing import Any
@@ -79,6 +80,8 @@ class _StepSettings:
     grow: float = 1.5
     algorithm: Any = PseudoArclength()
     locate: bool = True
+    max_angle: float = math.pi / 4
+    event_refine: int = 6
 
     def _check_steps(self) -> None:
         check_range("ds", self.ds, 0.0, float("inf"), lo_open=True, hi_open=True)
@@ -101,6 +104,8 @@ class _StepSettings:
         if not isinstance(self.locate, bool):
             raise ValueError(f"locate must be True or False, got {self.locate!r}")
         check_range("locate_tol", self.locate_tol, 0.0, 1.0, lo_open=True)
+        check_range("max_angle", self.max_angle, 0.0, math.pi, lo_open=True)
+        check_range("event_refine", self.event_refine, 0, 60, integer=True)
 
 
 @dataclass(frozen=True)
@@ -115,16 +120,26 @@ class CycleSettings(_StepSettings):
     step (the arclength metric can be dominated by T or by many states; inf = no cap).
     ``direction``: +1/-1, the initial orientation in lam.  Bounds: ``max_points`` recorded points; the branch ends
     (``REACHED_END``) when lam leaves [``lam_min``, ``lam_max``].
+    Guarded steps: a step whose tangent turns by more than ``max_angle`` [rad] from the last one is rejected and
+    retried with half the step (the corrector may have jumped to another branch, or the branch bends more sharply
+    than the step resolves); a step with an event that cannot be located (its test function jumps: the signature
+    of a jump between branches as much as of a coarse model) is retried with half the step up to
+    ``event_refine`` times before the event is reported as not located.  Neither check shrinks ds below
+    ``ds_min``.
     Corrector: ``newton_tol`` (residual max-norm accepted after a small step), ``newton_step_tol`` (a step is small
     when |dx| <= tol (1 + max|x|)), ``newton_max_iter``.
     ``algorithm``: :class:`PseudoArclength` (default) or :class:`Natural`.
-    Events: ``detect`` any of ("LPC", "PD", "NS"); ``locate`` drives each test function to zero (tolerance
+    Events: ``detect`` any of ("LPC", "PD", "NS", "BPC"); ``locate`` drives each test function to zero (tolerance
     ``locate_tol``) and inserts the located point in the branch.
     ``floquet``: a Floquet method (None: PeriodicQR with the dense solver, Arnoldi(k=12) with the sparse one).
     ``linear_solver``: DenseCondensation(), SparseSweep(...) or None (sparse when the problem has a Jacobian
     pattern and n >= 80).  ``save_states``: keep every point's full orbit in the branch (restarts, energies).
     ``trivial_tol`` in (0, 1): a point whose trivial multiplier lies farther than this from +1 is flagged
     (``Branch.flagged``): its multipliers, so its stability label, are not accurate to that level.
+    Mesh: every ``adapt`` points (0: never) the mesh is redistributed so that the estimated error of every
+    interval is the same (:mod:`._mesh`, as AUTO does), and the orbit corrected on it; every point carries its
+    estimated mesh error (``Branch.mesh_error``), and one above ``mesh_tol`` (relative to 1 + max|x|) is
+    flagged: its orbit, period and multipliers are not resolved to that level (raise ``N``).
     """
 
     m: int = 4
@@ -134,25 +149,29 @@ class CycleSettings(_StepSettings):
     newton_tol: float = 1e-9
     newton_step_tol: float = 1e-9
     newton_max_iter: int = 8
-    detect: tuple[str, ...] = ("LPC", "PD", "NS")
+    detect: tuple[str, ...] = ("LPC", "PD", "NS", "BPC")
     locate_tol: float = 1e-8
     floquet: FloquetMethod | None = None
     linear_solver: LinearSolver | None = None
     save_states: bool = False
     trivial_tol: float = 1e-5
+    adapt: int = 3
+    mesh_tol: float = 1e-4
 
     def __post_init__(self) -> None:
         check_range("m", self.m, 2, 7, integer=True)
         check_range("N", self.N, 2, 10**6, integer=True)
         self._check_steps()
         check_range("newton_step_tol", self.newton_step_tol, 0.0, 1.0, lo_open=True)
-        bad = [d for d in self.detect if d not in ("LPC", "PD", "NS")]
+        bad = [d for d in self.detect if d not in ("LPC", "PD", "NS", "BPC")]
         if bad or isinstance(self.detect, str):
-            raise ValueError(f"detect entries must be in ('LPC', 'PD', 'NS'), got {self.detect!r}")
+            raise ValueError(f"detect entries must be in ('LPC', 'PD', 'NS', 'BPC'), got {self.detect!r}")
         if self.floquet is not None and not isinstance(self.floquet, FloquetMethod):
             raise ValueError(f"floquet must be PeriodicQR(), TransferProduct(), Arnoldi(k) or None, "
                              f"got {self.floquet!r}")
         check_range("trivial_tol", self.trivial_tol, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range("adapt", self.adapt, 0, 10**6, integer=True)
+        check_range("mesh_tol", self.mesh_tol, 0.0, 1.0, lo_open=True, hi_open=True)
         if self.linear_solver is not None and not isinstance(self.linear_solver, LinearSolver):
             raise ValueError(f"linear_solver must be DenseCondensation(), SparseSweep(...) or None (automatic), "
                              f"got {self.linear_solver!r}")
@@ -168,7 +187,8 @@ class EquilibriumSettings(_StepSettings):
     """Settings of the continuation of equilibria.
 
     Steps and bounds as in :class:`CycleSettings` (``ds``, ``ds_min``, ``ds_max``, ``direction``, ``max_points``,
-    ``lam_min``, ``lam_max``, ``dlam_max``, ``fast_iter``, ``grow``, ``algorithm``).
+    ``lam_min``, ``lam_max``, ``dlam_max``, ``fast_iter``, ``grow``, ``algorithm``, ``max_angle``,
+    ``event_refine``).
     Corrector: ``newton_tol`` (a step is small when |dy| <= tol (1 + max|y|); the residual is then accepted below
     max(1e3 tol, 1e-9)), ``newton_max_iter``.
     Events: ``detect`` any of ("FOLD", "HOPF", "BP"); ``locate``, ``locate_tol`` as for cycles.

@@ -17,6 +17,7 @@ optimisers are compared.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,7 +28,7 @@ import numpy as np
 
 from .. import cont
 from ..cont import Orbit
-from ..analyses.cycles import gfb_cycle_problem, linear_response_start
+from ..analyses.cycles import gfb_cycle_problem, unbalance_response_start
 from ..limits import NoSolutionError
 from ..analyses.energy import CycleEnergy, orbit_energy
 from .. import limits
@@ -75,18 +76,41 @@ class CycleEvaluation:
         return float(self.energy.W_cb)
 
 
+#: Relative distance past a design bound that :func:`check_foil` treats as rounding and moves onto the bound
+#: (an optimiser working in log variables lands on ``exp(log(10)) = 10.000000000000002``).
+BOUND_ROUNDING = 1e-12
+
+
+def _onto_bound(value: Any, rng: limits.Range) -> Any:
+    if limits.is_traced(value):
+        return value
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return value  # the range check names the field
+    if math.isfinite(v):
+        if rng.hi is not None and rng.hi < v <= rng.hi * (1.0 + BOUND_ROUNDING):
+            return float(rng.hi)
+        if rng.lo is not None and rng.lo * (1.0 - BOUND_ROUNDING) <= v < rng.lo:
+            return float(rng.lo)
+    return value
+
+
 def check_foil(alpha_f: float, eta: float) -> tuple[float, float]:
     """ParameterError unless (alpha_f, eta) lie inside :data:`FOIL_BOUNDS` (NumPy and concrete JAX scalars are
-    accepted); returns them as Python floats."""
-    return limits.DESIGN_ALPHA_F.check(alpha_f), limits.DESIGN_ETA.check(eta)
+    accepted); returns them as Python floats.  A value past a bound by rounding only (relative
+    :data:`BOUND_ROUNDING`) is returned as the bound itself."""
+    return (limits.DESIGN_ALPHA_F.check(_onto_bound(alpha_f, limits.DESIGN_ALPHA_F)),
+            limits.DESIGN_ETA.check(_onto_bound(eta, limits.DESIGN_ETA)))
 
 
 class FoilDesign:
     """Limit cycle of ``params`` at speed ``omega`` (Omega_bar) as a function of (alpha_f, eta).
 
     m, N: collocation points and mesh intervals; linear_solver: ``cont.DenseCondensation()``,
-    ``cont.SparseSweep()`` or None (automatic: sparse on fine grids).  ``orbit``: a first guess (else the linear
-    forced response at the given params).  ``gradient_mode``: 'adjoint' (one transposed solve per objective, for
+    ``cont.SparseSweep()`` or None (automatic: sparse on fine grids).  ``orbit``: a first guess (else
+    :func:`gfbjax.analyses.cycles.unbalance_response_start`: the linear forced response at the given params, or a
+    cycle reached by ramping the unbalance up when that response would close the film).  ``gradient_mode``: 'adjoint' (one transposed solve per objective, for
     every parameter at once) or 'tangent' (one solve per design variable); both work with either linear solver
     and agree to rounding ('auto' = 'adjoint').  Counters: ``n_solves`` (cycle solves, failed ones included)
     and ``n_gradients``.
@@ -110,9 +134,11 @@ class FoilDesign:
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self.gradient_mode = "adjoint" if gradient_mode == "auto" else gradient_mode
-        if orbit is None:
-            x_of_t, T, _ = linear_response_start(params, self.omega)
-            orbit = cont.orbit_from_function(x_of_t, T, self.omega, self.scheme, cont.uniform_mesh(N))
+        if orbit is None:  # the linear response, or at a large unbalance a cycle reached by ramping the unbalance
+            try:
+                orbit, _ = unbalance_response_start(params, self.omega, self.settings)
+            except NoSolutionError as exc:
+                raise CycleNotConverged(str(exc)) from None
         self.orbit = self._at_speed(orbit)
         self.n_solves = 0
         self.n_gradients = 0

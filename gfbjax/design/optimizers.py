@@ -683,8 +683,13 @@ def minimize_log_box(
     counters = {"n": 0}
     it = 0
 
+    def to_x(z: np.ndarray) -> np.ndarray:
+        # exp(log(hi)) can round an ulp past hi (exp(log(10)) = 10.000000000000002): the point on a bound must be
+        # the bound itself, or the caller's own bound check refuses it
+        return np.clip(np.exp(z), lo_, hi_)
+
     def evaluate(z: np.ndarray) -> tuple[float, np.ndarray | None, str | None]:
-        x = np.exp(z)
+        x = to_x(z)
         counters["n"] += 1
         try:
             f, g = fun_and_grad(x)
@@ -697,7 +702,7 @@ def minimize_log_box(
         return (f, g, None) if fail is None else (math.inf, None, fail)
 
     def result(z, f, g, reason):
-        return GradientResult(np.exp(z), f, g if g is not None else np.full_like(z, np.nan), counters["n"],
+        return GradientResult(to_x(z), f, g if g is not None else np.full_like(z, np.nan), counters["n"],
                               counters["n"], it, reason, hist, trace)
 
     z = np.clip(np.log(x0), zl, zh)
@@ -740,7 +745,7 @@ def minimize_log_box(
             if bar is not None:
                 bar.update(1)
                 bar.set_postfix(f=f"{f:.6g}")
-            if callback is not None and callback(it, np.exp(z), f) is True:
+            if callback is not None and callback(it, to_x(z), f) is True:
                 return result(z, f, g, "callback")
             if step < z_tol:
                 return result(z, f, g, "z_tol")

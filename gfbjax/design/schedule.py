@@ -179,7 +179,10 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
     """March from ``omega_start`` to ``omega_end`` in steps ``d_omega`` (Omega_bar), optimising the foil at each
     speed from the previous optimum and cycle (paper Sect. 3.3 steps a-f).  Ends at ``omega_end``, at the first
     speed whose optimised cycle is unstable (recorded), or where no cycle converges; never loses the finished
-    speeds (also on KeyboardInterrupt)."""
+    speeds (also on KeyboardInterrupt).  The first speed's cycle comes from
+    :func:`gfbjax.analyses.cycles.unbalance_response_start` (a ramp in the unbalance when the linear response would
+    close the film); when no cycle converges from the last speed's optimum, the speed is approached again in
+    halved steps at the last optimum's foil before the march gives up."""
     _check(objective, method)
     d_omega = limits.SPEED_STEP.check(d_omega)
     omega_start = limits.SPEED.check(omega_start, "omega_start")
@@ -198,12 +201,22 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
     t0 = time.perf_counter()
     try:
         for w in speeds:
+            w_prev, orbit_prev = design.omega, design.orbit
             design.set_speed(float(w))  # step (e): the last optimum's cycle, period 2 pi / Omega, predicts
             try:
                 opt = optimize_at_speed(design, objective, method, x, **options)
             except CycleNotConverged as e:
-                sched.outcome, sched.message = Outcome.NO_SOLUTION, f"no cycle at Omega_bar = {w:.4f}: {e}"
-                break
+                # the last cycle was too far from this speed's (a strongly nonlinear cycle, a large unbalance):
+                # walk to this speed in smaller steps at the last optimum's foil, then optimise again
+                try:
+                    if not sched.omega:
+                        raise
+                    design.set_speed(w_prev, orbit_prev)
+                    _approach_speed(design, float(w), x if x is not None else (params.alpha_f, params.eta))
+                    opt = optimize_at_speed(design, objective, method, x, **options)
+                except CycleNotConverged:
+                    sched.outcome, sched.message = Outcome.NO_SOLUTION, f"no cycle at Omega_bar = {w:.4f}: {e}"
+                    break
             ev = opt.evaluation
             x = (opt.alpha_f, opt.eta)
             lay_idx = _journal_columns(params)
@@ -236,6 +249,26 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
     sched.n_solves, sched.n_gradients = design.n_solves, design.n_gradients
     sched.seconds = time.perf_counter() - t0
     return sched
+
+
+def _approach_speed(design: FoilDesign, omega: float, foil: tuple[float, float], min_step: float = 1e-3) -> None:
+    """Move ``design`` from its converged cycle to a converged cycle at ``omega`` at the foil ``foil``, halving the
+    speed step after every failed solve (natural continuation in Omega_bar).  Raises :class:`CycleNotConverged`
+    when a step below ``min_step`` fails."""
+    alpha_f, eta = float(foil[0]), float(foil[1])
+    reached, targets = design.omega, [float(omega)]
+    while targets:
+        w = targets[-1]
+        design.set_speed(w)
+        try:
+            design.evaluate(alpha_f, eta)
+        except CycleNotConverged:
+            if abs(w - reached) < min_step:
+                raise
+            design.set_speed(reached)
+            targets.append(0.5 * (reached + w))
+            continue
+        reached = targets.pop()
 
 
 def _journal_columns(params: Params) -> list[int]:

@@ -1,5 +1,5 @@
 """Compressible Reynolds equation on the finite-difference grid: pressure rates (Eq. 2b, as corrected in
-DESIGN.md), film thickness (Eq. 3), bearing forces (Eq. 7) and strip mean pressure (Eq. 9).
+docs/model.md), film thickness (Eq. 3), bearing forces (Eq. 7) and strip mean pressure (Eq. 9).
 
 All quantities are dimensionless: ``p = p/p0``, ``h = h/c``, time ``tau = t/t*``, speed ``Omega_bar`` (= the
 bearing number Lambda).  The discretisation is conservative and second order: Poiseuille fluxes on cell faces with
@@ -49,7 +49,7 @@ def _pad(P: Array, h: Array, grid: Grid) -> tuple[Array, Array]:
 
 
 def pressure_rates(P: Array, h: Array, hdot: Array, omega: Array, kappa: Array, grid: Grid) -> Array:
-    """dp/dtau at the unknowns, Eq. (2b) (corrected, DESIGN.md):
+    """dp/dtau at the unknowns, Eq. (2b) (corrected, docs/model.md):
 
     ``p' = [ 1/2 d/dth(p h^3 dp/dth) + kappa^2/2 d/dz(p h^3 dp/dz) - Omega/2 d/dth(p h) ] / h - p h'/h``.
 

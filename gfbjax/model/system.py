@@ -66,7 +66,7 @@ def core_rates(s: Array, omega: Array, F_U: Array, params: Params) -> Array:
     theta = grid.theta(params.theta0)
     # foil first: its rate enters dh/dtau of the Reynolds equation
     drive = gauge(mean_gauge_pressure(P, grid), params.gumbel_width)
-    qdot = foil_rates(q, drive, omega, params.alpha_f, params.eta)
+    qdot = foil_rates(q, drive, omega, params.alpha_f, params.eta, params.structural_damping)
     vx, vy = (r[2], r[3]) if params.rotor == "rigid" else (r[4], r[5])
     h = film_thickness(grid.theta_nodes(params.theta0), r[0], r[1], jnp.pad(q, 1))
     hdot = -vx * jnp.cos(theta) - vy * jnp.sin(theta) + qdot
@@ -120,7 +120,7 @@ def initial_state(params: Params, oscillator: bool = False) -> Array:
 def plain_bearing_rates(P: Array, x: Array, y: Array, vx: Array, vy: Array, omega: Array, kappa: Array,
                         grid: Grid) -> Array:
     """Pressure rates of a plain rigid 360-degree gas journal bearing (periodic in theta, no foil): the
-    validation model of REFERENCE.md.  Journal at (x, y)/c moving at (vx, vy) [c/t*]."""
+    validation model of docs/model.md.  Journal at (x, y)/c moving at (vx, vy) [c/t*]."""
     theta = grid.theta(0.0)
     h = film_thickness(theta, x, y)
     hdot = -vx * jnp.cos(theta) - vy * jnp.sin(theta)

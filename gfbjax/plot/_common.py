@@ -87,3 +87,30 @@ def colours(n: int) -> list:
 
     cyc = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     return [cyc[i % len(cyc)] for i in range(n)]
+
+
+def rpm_factor(rpm_per_omega_bar: float | None = None, spec: Any = None, branches: Any = ()) -> float | None:
+    """rpm per unit Omega_bar: ``rpm_per_omega_bar`` if given, else ``spec.rpm(1.0)`` of a SystemSpec, else the
+    ``rpm_per_omega_bar`` a branch records in its ``meta`` (branches computed with ``spec=``); None if unknown."""
+    if rpm_per_omega_bar is not None:
+        f = float(rpm_per_omega_bar)
+        if not (np.isfinite(f) and f > 0):
+            raise ValueError(f"rpm_per_omega_bar must be a positive number, got {rpm_per_omega_bar!r}")
+        return f
+    if spec is not None:
+        return float(spec.rpm(1.0))
+    for b in branches:
+        f = (getattr(b, "meta", None) or {}).get("rpm_per_omega_bar")
+        if f:
+            return float(f)
+    return None
+
+
+def rpm_axis(ax: Any, factor: float | None, label: str = "speed [rpm]") -> Any:
+    """A secondary x axis on top of ``ax`` (whose x is Omega_bar) in rpm, ``rpm = factor * Omega_bar``; nothing
+    when ``factor`` is None.  Returns the secondary axis or None."""
+    if factor is None:
+        return None
+    sec = ax.secondary_xaxis("top", functions=(lambda x: x * factor, lambda r: r / factor))
+    sec.set_xlabel(label)
+    return sec

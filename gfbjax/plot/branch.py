@@ -11,7 +11,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._common import axes_grid, colours, finish, labelled
+from ._common import axes_grid, colours, finish, labelled, rpm_axis, rpm_factor
 
 __all__ = ["plot_bifurcation", "plot_multipliers", "plot_equilibria", "plot_energy", "plot_schedule",
            "SPECIAL_STYLE"]
@@ -108,7 +108,7 @@ def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:
 
 def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
                      c_um: float | None = None, title: str | None = None, path: str | Path | None = None,
-                     ax: Any = None):
+                     ax: Any = None, spec: Any = None, rpm_per_omega_bar: float | None = None):
     """Bifurcation diagram of a cycle branch: max and min over the cycle of the journal vertical (top) and
     horizontal (bottom) displacement against Omega_bar; stable solid, unstable dashed; special points marked
     (located filled, only bracketed hollow with a "?"), points with a doubtful stability label
@@ -118,7 +118,9 @@ def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"),
     ``(label, Branch)`` pairs, overlaid with one colour per branch (its max and min) and its label in the legend.
     ``columns`` are the columns of ``branch.xmax`` holding ``names`` (the recorded rotor components are
     x_j, y_j[, x_d, y_d]).  ``ax``: None (a new figure) or 2 Axes (vertical, horizontal panel) to draw into; then
-    their figure is returned and gets a suptitle only when ``title`` is given."""
+    their figure is returned and gets a suptitle only when ``title`` is given.  A secondary speed axis in rpm is
+    drawn on top when the conversion is known: ``rpm_per_omega_bar``, a ``spec`` (SystemSpec), or the branch's
+    ``meta["rpm_per_omega_bar"]``."""
     items, several = labelled(branch, _is_branch)
     col_of = dict(zip(names, columns))
     panels = [("y_j", "vertical $y_j/c$"), ("x_j", "horizontal $x_j/c$")]
@@ -157,6 +159,7 @@ def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"),
         _style_legend(axes[0])
     axes[0].legend(loc="best", fontsize=7, ncol=2)
     axes[1].set_xlabel(r"speed $\bar\Omega$")
+    rpm_axis(axes[0], rpm_factor(rpm_per_omega_bar, spec, [b for _, b in items]))
     return finish(fig, path, new=new, title=title, default="Limit cycles: bifurcation diagram", tight=True, dpi=130)
 
 
@@ -212,7 +215,8 @@ def critical_real_part(branch: Any) -> np.ndarray:
 
 
 def plot_equilibria(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), columns: Sequence[int] = (0, 1),
-                    title: str | None = None, path: str | Path | None = None, ax: Any = None):
+                    title: str | None = None, path: str | Path | None = None, ax: Any = None, spec: Any = None,
+                    rpm_per_omega_bar: float | None = None):
     """Equilibrium branch of the balanced rotor: journal position (x_j, y_j over c; top) and the real part of the
     critical eigenvalue (bottom) against Omega_bar (stable solid, unstable dashed), Hopf and fold points marked
     (located filled, only bracketed hollow with a "?").
@@ -220,7 +224,8 @@ def plot_equilibria(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), 
     ``branch``: one :class:`gfbjax.cont.Branch` (x_j blue, y_j red), or several as a ``{label: Branch}`` dict or
     ``(label, Branch)`` pairs, overlaid with one colour per branch and its label in the legend (the components
     are then named at the end of their lines).  ``ax``: None (a new figure) or 2 Axes (position, eigenvalue) to
-    draw into; then their figure is returned and gets a suptitle only when ``title`` is given."""
+    draw into; then their figure is returned and gets a suptitle only when ``title`` is given.  Secondary rpm axis
+    on top as in :func:`plot_bifurcation` (``spec``, ``rpm_per_omega_bar`` or the branch's meta)."""
     items, several = labelled(branch, _is_branch)
     fig, axes, new = axes_grid(ax, 2, 1, figsize=(8, 7), sharex=True)
     axes = axes[:, 0]
@@ -257,6 +262,7 @@ def plot_equilibria(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), 
     for a in axes:
         a.grid(alpha=0.3)
         a.legend(loc="best", fontsize=7)
+    rpm_axis(axes[0], rpm_factor(rpm_per_omega_bar, spec, [b for _, b in items]))
     return finish(fig, path, new=new, title=title, default="Equilibria of the balanced rotor", tight=True, dpi=130)
 
 
@@ -264,7 +270,8 @@ _ENERGY_STYLE = {"W_fu": ("$W_{fu}$", "k"), "W_cf": ("$W_{cf}$", "tab:green"), "
 
 
 def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[str] = ("W_fu", "W_cf", "W_cb"),
-                title: str | None = None, path: str | Path | None = None, ax: Any = None):
+                title: str | None = None, path: str | Path | None = None, ax: Any = None, spec: Any = None,
+                rpm_per_omega_bar: float | None = None):
     """Energy flow along cycle branches (paper Fig. 12): W_fu, W_cf and W_cb [p0 R L c] against Omega_bar, one
     panel per design; stable solid, unstable dashed; NS points and the sign changes of W_cb marked.
 
@@ -273,7 +280,8 @@ def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[st
     points.  ``overlay``: all designs in one panel, one colour per design with its label in the legend (each
     curve named at its end) instead of one panel each.  ``quantities``: which of W_fu, W_cf, W_cb to draw.
     ``ax``: None (a new figure: panels in two columns) or one Axes per panel (one per design, or one with
-    ``overlay``) to draw into; then their figure is returned and gets a suptitle only when ``title`` is given."""
+    ``overlay``) to draw into; then their figure is returned and gets a suptitle only when ``title`` is given.
+    Secondary rpm axis on top of each panel as in :func:`plot_bifurcation`."""
     from ..analyses.energy import sign_changes
 
     items, _ = labelled(branches, lambda o: isinstance(o, tuple) and len(o) == 2 and _is_branch(o[0]))
@@ -308,7 +316,9 @@ def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[st
             a.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec=colour if overlay else "tab:red", ms=8)
         if not overlay:
             a.set_title(label or "", fontsize=10)
+    factor = rpm_factor(rpm_per_omega_bar, spec, [b for _, (b, _E) in items])
     for a in panels[:k]:
+        rpm_axis(a, factor)
         if overlay:
             _style_legend(a)
         a.axhline(0.0, color="0.5", lw=0.6)
@@ -323,7 +333,8 @@ def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[st
 
 
 def plot_schedule(schedules: Any, *, n_show: int | None = 8, title: str | None = None,
-                  path: str | Path | None = None, ax: Any = None):
+                  path: str | Path | None = None, ax: Any = None, spec: Any = None,
+                  rpm_per_omega_bar: float | None = None):
     """Optimised foil schedules along the speed (paper Figs. 16-19), one line (colour) per schedule:
 
     a) journal orbit extent, the max and min over the cycle of y_j (solid) and x_j (dotted) [c];
@@ -335,7 +346,8 @@ def plot_schedule(schedules: Any, *, n_show: int | None = 8, title: str | None =
     Unstable optimised cycles (where a march ends) are marked with a cross.  ``schedules``: (label,
     :class:`gfbjax.design.schedule.Schedule`) pairs, a ``{label: Schedule}`` dict or one Schedule.  ``ax``: None
     (a new figure) or 6 Axes (a-f, a 3 x 2 layout in row-major order) to draw into; then their figure is returned
-    and gets a suptitle only when ``title`` is given."""
+    and gets a suptitle only when ``title`` is given.  With ``spec`` or ``rpm_per_omega_bar`` the speed panels
+    get a secondary rpm axis on top."""
     from ..design.evaluate import FOIL_BOUNDS
 
     items, _ = labelled(schedules, lambda o: hasattr(o, "alpha_f") and hasattr(o, "omega"))
@@ -380,7 +392,9 @@ def plot_schedule(schedules: Any, *, n_show: int | None = 8, title: str | None =
               (ax_e, r"c) foil loss factor $\eta$", r"$\eta$"),
               (ax_mu, r"d) largest non-trivial Floquet multiplier", r"max $|\mu|$"),
               (ax_w, r"e) gas-film dissipation per cycle $W_{cb}$", r"$W_{cb}$ [$p_0 R L c$]"))
+    factor = rpm_factor(rpm_per_omega_bar, spec)
     for ax, head, ylabel in panels:
+        rpm_axis(ax, factor)
         ax.set_title(head, fontsize=10)
         ax.set_xlabel(r"speed $\bar\Omega$")
         ax.set_ylabel(ylabel)

@@ -8,7 +8,7 @@ Figures are made with ``pyplot`` so that they show inline in notebooks; scripts 
 falls back to the non-interactive Agg backend without a display; the ``gfbjax`` command line selects Agg
 explicitly).
 
-Conventions (DESIGN.md): lengths over the radial clearance ``c``, pressures over ambient ``p0``, time over
+Conventions (docs/model.md): lengths over the radial clearance ``c``, pressures over ambient ``p0``, time over
 ``t* = 6 mu R^2 / (p0 c^2)``; y points up, gravity and the extra load act downwards; theta is measured from the
 horizontal x axis towards y, in the direction of rotation; the foil is clamped at ``theta0`` (default 90 deg, top).
 

@@ -11,13 +11,14 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..analyses.signals import Spectrogram, spectrum
-from ._common import axes_grid, finish
+from ._common import axes_grid, finish, rpm_axis, rpm_factor
 
 __all__ = ["plot_runup", "plot_spectrogram", "plot_orbit_poincare_fft"]
 
 
 def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c_um: float | None = None,
-               title: str | None = None, path: str | Path | None = None, ax: Any = None):
+               title: str | None = None, path: str | Path | None = None, ax: Any = None, spec: Any = None,
+               rpm_per_omega_bar: float | None = None):
     """Journal vertical (a) and horizontal (b) displacement against speed during a run-up (paper Fig. 7a/7b).
 
     Args:
@@ -28,6 +29,8 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
         c_um: clearance in um for a secondary axis label (None: over c only).
         ax: None (a new figure) or 2 Axes (vertical, horizontal) to draw into; then their figure is returned and
             gets a suptitle only when ``title`` is given.
+        spec, rpm_per_omega_bar: the SystemSpec or the factor rpm / Omega_bar; either draws a secondary speed axis
+            in rpm on top (none without them).
     """
     fig, axes, new = axes_grid(ax, 2, 1, figsize=(8, 6.5), sharex=True)
     axes = axes[:, 0]
@@ -48,17 +51,18 @@ def plot_runup(result: Any, cycles: Mapping[str, np.ndarray] | None = None, *, c
         ax.grid(alpha=0.3)
     axes[0].legend(loc="best", fontsize=7)
     axes[1].set_xlabel(r"speed $\bar\Omega$")
+    rpm_axis(axes[0], rpm_factor(rpm_per_omega_bar, spec))
     return finish(fig, path, new=new, title=title, tight=True, dpi=130,
                   default="Run-up: journal response against speed (paper Fig. 7a/b)")
 
 
 def plot_spectrogram(sg: Spectrogram, *, max_order: float | None = None, db_range: float = 60.0,
                      subsync: list | None = None, title: str | None = None, path: str | Path | None = None,
-                     ax: Any = None):
+                     ax: Any = None, spec: Any = None, rpm_per_omega_bar: float | None = None):
     """STFT amplitude against speed and order (multiples of the running frequency; paper Fig. 7c) with the 1X
     line; ``subsync`` ranges (from :func:`gfbjax.analyses.signals.subsynchronous`) are marked.  ``ax``: None (a
     new figure) or one Axes to draw into (its figure is returned, with the colour bar beside the Axes);
-    ``title`` is the axes title."""
+    ``title`` is the axes title.  ``spec`` or ``rpm_per_omega_bar``: a secondary speed axis in rpm on top."""
     o = sg.order if max_order is None else sg.order[sg.order <= max_order]
     A = sg.order_amplitude[:, : o.size]
     ref = max(float(A.max()), 1e-300)
@@ -74,7 +78,8 @@ def plot_spectrogram(sg: Spectrogram, *, max_order: float | None = None, db_rang
     ax.set_xlabel(r"speed $\bar\Omega$")
     ax.set_ylabel("frequency / running frequency")
     ax.legend(loc="upper right", fontsize=7)
-    ax.set_title(title or "STFT of the run-up (paper Fig. 7c)")
+    rpm_axis(ax, rpm_factor(rpm_per_omega_bar, spec))
+    ax.set_title(title or "STFT of the run-up (paper Fig. 7c)", pad=24 if (spec or rpm_per_omega_bar) else None)
     return finish(fig, path, new=new, title=None, tight=True, dpi=130)
 
 

@@ -175,3 +175,26 @@ def test_branch_point_on_the_side_branch_is_no_fold():
     x = br.states["x"][:, 0]
     np.testing.assert_allclose(x ** 2, -br.lam, atol=1e-9)
     assert x[0] > 0 and x[-1] < 0
+
+
+def cycle_pitchfork(x, lam, args):
+    """The unit-circle cycle of a Hopf normal form (period 2 pi, whatever lam) times z' = lam z - z^3: along
+    z = 0 the z-multiplier exp(2 pi lam) passes through +1 at lam = 0, a pitchfork of cycles (z = +-sqrt(lam))."""
+    r2 = x[0] ** 2 + x[1] ** 2
+    return jnp.stack([-x[1] + x[0] * (1 - r2), x[0] + x[1] * (1 - r2), lam * x[2] - x[2] ** 3])
+
+
+def test_branch_point_of_cycles_is_reported():
+    """A non-trivial multiplier through +1 without a fold (issue 12, item 2): a located BPC at lam = 0, where
+    before the stability label just flipped."""
+    from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_function
+
+    st = CycleSettings(m=4, N=12, ds=0.1, ds_max=0.2, lam_min=-0.5, lam_max=0.5, max_points=30)
+    start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), 0 * t], -1),
+                                2 * np.pi, -0.5, st)
+    br = continue_cycles(CycleProblem(cycle_pitchfork, 3), st, start)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert [s.type for s in br.special] == ["BPC"], br.special
+    bpc = br.special[0]
+    assert bpc.located and abs(bpc.lam) < 1e-8
+    assert np.all(br.stable[br.lam < -1e-9]) and not np.any(br.stable[br.lam > 1e-9])

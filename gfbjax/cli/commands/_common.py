@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ... import limits
-from ...params import VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
+from ...params import PRESETS, VARIATIONS, ParameterError, SystemSpec, system_from_name_or_file
 
 __all__ = [
     "SYSTEM_NAMES",
@@ -50,6 +50,11 @@ __all__ = [
     "write_json",
     "write_summary",
     "to_jsonable",
+    "add_speed_option",
+    "resolve_speeds",
+    "speed_si",
+    "work_unit_J",
+    "branch_row_um",
 ]
 
 SYSTEM_NAMES = tuple(VARIATIONS) + ("validation10N", "validation15N")
@@ -67,13 +72,19 @@ def _field_doc() -> str:
 
 
 def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
-    """Add ``--system``, ``--set``, ``--nx``, ``--nz`` and ``--out`` (default ``results/<command>``)."""
+    """Add ``--system``, ``--preset``, ``--set``, ``--nx``, ``--nz`` and ``--out`` (default ``results/<command>``)."""
     g = parser.add_argument_group("system", "which rotor-bearing system to analyse (SI inputs; see gfbjax.SystemSpec)")
     g.add_argument(
         "--system", default="reference", metavar="NAME|FILE.toml",
         help=("named system: " + ", ".join(SYSTEM_NAMES) + " (the paper's design variations of the reference "
-              "system, DESIGN.md; validation10N/15N: rigid rotor of Table 1), or a .toml file of SystemSpec fields "
+              "system, docs/model.md; validation10N/15N: rigid rotor of Table 1), or a .toml file of SystemSpec fields "
               "with an optional 'base' key naming one of these (default: %(default)s)"))
+    g.add_argument(
+        "--preset", default=None, choices=tuple(PRESETS),
+        help=("convention preset applied to the system before --set (gfbjax.params.PRESETS, docs/model.md): "
+              "'corrected' (foil damping c_f = eta k_f / Omega_bar, unbalance e_u / c on the disc, omega_r in "
+              "rad/s: the defaults) or 'paper' (the paper read literally: c_f = eta k_f, the unbalance "
+              "(m_d + 2 m_j) e_u carried by the disc, omega_r in rpm); default: the system's own"))
     g.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="FIELD=VALUE",
         help=("override a SystemSpec field, repeatable, e.g. --set alpha_f=0.3 --set rotor=rigid; the value is "
@@ -147,8 +158,11 @@ def parse_set(items: Iterable[str]) -> dict[str, Any]:
 
 
 def spec_from_args(args: argparse.Namespace) -> SystemSpec:
-    """The SystemSpec of ``--system`` with ``--set``, ``--nx`` and ``--nz`` applied (all checked)."""
+    """The SystemSpec of ``--system`` with ``--preset``, then ``--set``, ``--nx`` and ``--nz`` applied (all
+    checked)."""
     spec = system_from_name_or_file(args.system)
+    if getattr(args, "preset", None) is not None:
+        spec = spec.with_preset(args.preset)
     changes = parse_set(getattr(args, "overrides", []) or [])
     if getattr(args, "nx", None) is not None:
         changes["Nx"] = args.nx
@@ -261,3 +275,79 @@ def check_continuation_options(args: argparse.Namespace) -> None:
     if args.ds_max < args.ds:
         raise ParameterError(f"--ds-max = {args.ds_max:g} must be at least --ds = {args.ds:g}")
     check_option("--max-points", args.max_points, 2, 10**6, what="points", integer=True)
+
+
+# -- speeds in Omega_bar or rpm -------------------------------------------------------------------------------------
+# One scheme for every command: each speed option --X (Omega_bar) has a twin --X-rpm (rev/min), mutually exclusive;
+# resolve_speeds() converts the rpm twin with the system's t* and writes Omega_bar back into args.X.
+
+
+def add_speed_option(group: Any, flag: str, *, default: float | None, help: str, rpm_flag: str | None = None,
+                     metavar: str = "OMEGA_BAR") -> None:
+    """Add ``flag`` (a speed in Omega_bar) and its rpm twin (``rpm_flag``, default ``flag + "-rpm"``) as a mutually
+    exclusive pair to ``group``; :func:`resolve_speeds` turns the twin into Omega_bar."""
+    ex = group.add_mutually_exclusive_group()
+    ex.add_argument(flag, type=float, default=default, metavar=metavar, help=help)
+    ex.add_argument(rpm_flag or flag + "-rpm", type=float, default=None, metavar="RPM",
+                    help=f"{flag} in rev/min instead, converted with the system's time scale t* "
+                         "(rpm = Omega_bar / t* * 60 / (2 pi))")
+
+
+def _dest(flag: str) -> str:
+    return flag.lstrip("-").replace("-", "_")
+
+
+def resolve_speeds(args: argparse.Namespace, spec: SystemSpec, *flags: str | tuple[str, str],
+                   rng: limits.Range = limits.SPEED) -> None:
+    """Set each speed option of ``flags`` (``"--start"`` or a pair ``("--speed", "--rpm")``: the Omega_bar option
+    and its rpm twin) in Omega_bar on ``args``: from the rpm twin when given (checked against ``rng`` in rev/min),
+    else the Omega_bar value (checked against ``rng``; when it is out of range but would be a valid rpm, the
+    message suggests the twin, e.g. ``--start = 10000 is outside the allowed range (0, 50] (Omega_bar); did you mean
+    --start-rpm 10000 (= Omega_bar 0.28)?``).  Options that are None stay None."""
+    for item in flags:
+        flag, rpm_flag = item if isinstance(item, tuple) else (item, item + "-rpm")
+        rpm = getattr(args, _dest(rpm_flag), None)
+        if rpm is not None:
+            lo = spec.rpm(rng.lo) if rng.lo is not None else None
+            hi = spec.rpm(rng.hi) if rng.hi is not None else None
+            rpm_rng = rng.with_bounds(lo=lo, hi=hi, unit="rev/min", what=f"Omega_bar in {rng.interval()}")
+            setattr(args, _dest(flag), spec.omega_bar(check_range(rpm_flag, rpm, rpm_rng)))
+            continue
+        value = getattr(args, _dest(flag), None)
+        if value is None:
+            continue
+        try:
+            check_range(flag, value, rng)
+        except ParameterError as exc:
+            hint = ""
+            try:
+                om = spec.omega_bar(float(value))
+            except (ParameterError, TypeError, ValueError):
+                om = None
+            if om is not None and rng.contains(om):
+                hint = f"; did you mean {rpm_flag} {value:g} (= Omega_bar {om:.4g})?"
+            raise ParameterError(f"{exc}{hint}") from None
+
+
+def work_unit_J(spec: SystemSpec) -> float:
+    """``p0 R L c`` [J]: the unit of the works per cycle of :mod:`gfbjax.analyses.energy`."""
+    return spec.p0 * spec.R * spec.L * spec.c
+
+
+def branch_row_um(branch: Any, index: Any, spec: SystemSpec) -> dict[str, Any]:
+    """Journal max and min over a branch row (x_j, y_j) in um, ``{}`` when the row is not stored."""
+    import numpy as np
+
+    if index is None or not 0 <= int(index) < len(branch.lam):
+        return {}
+    c_um = spec.c * 1e6
+    return {"xj_yj_max_um": (np.asarray(branch.xmax)[int(index), :2] * c_um).tolist(),
+            "xj_yj_min_um": (np.asarray(branch.xmin)[int(index), :2] * c_um).tolist()}
+
+
+def speed_si(spec: SystemSpec, omega_bar: float | None) -> dict[str, float | None]:
+    """``{"rpm": ..., "running_frequency_Hz": ...}`` of a speed in Omega_bar (None stays None)."""
+    if omega_bar is None:
+        return {"rpm": None, "running_frequency_Hz": None}
+    om = float(omega_bar)
+    return {"rpm": spec.rpm(om), "running_frequency_Hz": om / spec.t_star / (2 * math.pi)}

@@ -7,14 +7,17 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from ...cont import Outcome
 from ...limits import NoSolutionError
 from typing import Any
 
 from ... import limits
 from ...params import ParameterError
-from ._common import (add_system_options, check_continuation_options, check_option, check_range, output_dir,
-                      spec_from_args, traced_params, write_summary)
+from ._checkpoints import add_checkpoint_options, checkpoint_folder, interrupted_status, resume_args
+from ._contact import (accuracy_line, accuracy_summary, add_contact_options, contact_kwargs, contact_line,
+                       contact_summary)
+from ._common import (add_speed_option, add_system_options, branch_row_um, check_continuation_options, check_option,
+                      check_range, output_dir, resolve_speeds, spec_from_args, speed_si, traced_params,
+                      write_summary)
 
 NAME = "cycles"
 
@@ -24,10 +27,11 @@ forced response at --start towards --end: orthogonal collocation (--N intervals 
 steps, Floquet multipliers at every point, and the fold (LPC), period-doubling (PD) and Neimark-Sacker (NS)
 bifurcations, located by regula falsi unless --no-locate.  A progress bar advances with the speed.
 
-Writes to --out: branch.npz + branch.json (the branch, gfbjax.cont.Branch.load; plain numpy + json; the JSON
+Writes to --out: branch.npz + branch.json (the branch with the collocation states of every point, for
+'gfbjax energy --branch' and restarts; gfbjax.cont.Branch.load; plain numpy + json; the JSON
 records the system spec and its conventions, the grid, the component names, units and the rpm conversion),
 cycles.json (summary: special points with speed, rpm, multipliers' moduli, NS angle; why the branch ended;
-counts; timings), cycles_bifurcation.png (max/min of the journal y_j and x_j against speed, stable solid,
+counts; timings), checkpoint/ (every point as it is accepted, for --resume), cycles_bifurcation.png (max/min of the journal y_j and x_j against speed, stable solid,
 unstable dashed, special points marked) and cycles_multipliers.png (Floquet multipliers and unit circle).
 Exit status: 0 when the branch reached --end, 1 when it ended early (everything is still written), 2 for
 invalid input.
@@ -55,8 +59,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_system_options(p, NAME)
     r = p.add_argument_group("speed range")
-    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
-    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
+    add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
     n = p.add_argument_group("numerics")
     n.add_argument("--m", type=int, default=4, metavar="M",
                    help=f"collocation points per mesh interval, in {limits.COLLOCATION_M.interval()} (default 4)")
@@ -71,9 +75,11 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="most points on the branch (default 200)")
     n.add_argument("--no-locate", action="store_true",
                    help="do not locate the bifurcations (report the step where they were detected)")
+    add_contact_options(p)
     o = p.add_argument_group("output")
     o.add_argument("--no-figures", action="store_true", help="no PNG figures")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_checkpoint_options(p)
     p.set_defaults(func=run)
     return p
 
@@ -88,7 +94,7 @@ def _settings(args: argparse.Namespace):
     try:
         return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
                                       ds_max=args.ds_max, dlam_max=args.dlam_max, max_points=args.max_points,
-                                      locate=not args.no_locate)
+                                      locate=not args.no_locate, save_states=True)
     except ValueError as exc:
         msg = str(exc)
         field = msg.split()[0] if msg else ""
@@ -129,6 +135,10 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
             d["ns_angle_deg"] = math.degrees(a)
             # the second frequency of the torus, as a multiple of the running frequency (modulo 1)
             d["ns_frequency_ratio"] = a / (2 * math.pi)
+        si = speed_si(spec, lam)
+        if "ns_frequency_ratio" in d:
+            si["ns_frequency_Hz"] = d["ns_frequency_ratio"] * si["running_frequency_Hz"]
+        d["SI"] = {**si, **branch_row_um(branch, s.index, spec)}
         out.append(d)
     return out
 
@@ -157,14 +167,24 @@ class _SpeedBar:
             try:
                 from tqdm.auto import tqdm
 
-                self.bar = tqdm(total=round(abs(end - start), 6), desc="cycles",
+                # Until the first point the time goes into compiling the solver's kernels (or loading them from
+                # the compilation cache) and the start's correction: an ETA from it would be meaningless.
+                self.bar = tqdm(total=round(abs(end - start), 6), desc="cycles (compiling, first point)",
                                 bar_format="{l_bar}{bar}| [{elapsed}<{remaining}{postfix}]")
             except ImportError:  # pragma: no cover
                 self.bar = None
+        self.first = True
+        self.t_first: float | None = None  # perf_counter() at the first point (compilation and start included)
 
     def __call__(self, index: int, rec: Any) -> None:
+        if self.t_first is None:
+            self.t_first = time.perf_counter()
         if self.bar is None:
             return None
+        if self.first:  # rates and ETAs count from the first point, after the compilation
+            self.first = False
+            self.bar.reset(total=self.bar.total)
+            self.bar.set_description("cycles", refresh=False)
         lam = float(rec.lam)
         frac = min(max((lam - self.start) / (self.end - self.start), 0.0), 1.0) * abs(self.end - self.start)
         if frac > self.done:  # set the position (not increments) so that rounding never overshoots the total
@@ -188,16 +208,22 @@ def run(args: argparse.Namespace) -> int:
     from ...analyses.cycles import continue_gfb_cycles, rotor_components
 
     t0 = time.perf_counter()
+    args = resume_args(args, NAME)
     spec = spec_from_args(args)
+    resolve_speeds(args, spec, "--start", "--end")
     settings = _settings(args)
     out = output_dir(args)
     params = traced_params(spec)
+    contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
+    ck = checkpoint_folder(args, out, NAME)
     print(f"gfbjax cycles: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
-          f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}", flush=True)
+          f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}"
+          + (f", resuming {ck}" if args.resume is not None else ""), flush=True)
     bar = _SpeedBar(args.start, args.end, not args.quiet)
     t1 = time.perf_counter()
     try:
-        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar, spec=spec)
+        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar, spec=spec,
+                                     checkpoint=ck, **contact)
     except NoSolutionError as exc:  # no static equilibrium at the start speed
         bar.close()
         print(f"gfbjax cycles: {exc}", flush=True)
@@ -218,11 +244,11 @@ def run(args: argparse.Namespace) -> int:
         + (f" ({t_cont / max(len(branch), 1):.2f} s per point)" if len(branch) else ""),
         format_table(rows),
     ]
-    n_flagged = int(np.sum(branch.flagged))
+    if len(branch) and branch.monitor is not None:
+        lines.insert(1, contact_line(branch, spec))
+    acc = accuracy_summary(branch)
     if len(branch):
-        lines.insert(1, f"  max trivial error {float(np.nanmax(branch.trivial_error)):.2e} (|mu_trivial - 1|)"
-                        + (f"; {n_flagged} points above trivial_tol = {settings.trivial_tol:g}: their stability "
-                           "labels are unreliable (refine --N)" if n_flagged else ""))
+        lines.insert(1, accuracy_line(acc))
     print("\n".join(lines), flush=True)
 
     figures: list[str] = []
@@ -232,7 +258,7 @@ def run(args: argparse.Namespace) -> int:
 
         from ...plot.branch import plot_bifurcation, plot_multipliers
 
-        fig = plot_bifurcation(branch, c_um=c_um, title=f"Limit cycles, system '{args.system}' "
+        fig = plot_bifurcation(branch, c_um=c_um, spec=spec, title=f"Limit cycles, system '{args.system}' "
                                                         f"(Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})",
                                path=out / "cycles_bifurcation.png")
         plt.close(fig)
@@ -247,21 +273,23 @@ def run(args: argparse.Namespace) -> int:
     data = {
         "command": NAME, "gfbjax_version": gfbjax.__version__,
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star, "c_um": c_um},
-        "range": {"start": args.start, "end": args.end, "reached_end": ok},
+        "range": {"start": args.start, "end": args.end, "reached_end": ok,
+                  "start_rpm": spec.rpm(args.start), "end_rpm": spec.rpm(args.end)},
         "settings": {"m": settings.m, "N": settings.N, "ds": settings.ds, "ds_max": settings.ds_max,
                      "dlam_max": settings.dlam_max, "max_points": settings.max_points, "locate": settings.locate},
         "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "unstable": len(branch) - n_stable,
-                   "special": len(rows), **{k: sum(1 for d in rows if d["type"] == k) for k in ("LPC", "PD", "NS")}},
-        "accuracy": {"trivial_tol": settings.trivial_tol, "flagged_points": n_flagged,
-                     "max_trivial_error": float(np.nanmax(branch.trivial_error)) if len(branch) else None},
+                   "special": len(rows), **{k: sum(1 for d in rows if d["type"] == k) for k in ("LPC", "PD", "NS", "BPC")}},
+        "film": contact_summary(branch, spec),
+        "accuracy": acc,
         "lam_first": float(branch.lam[0]) if len(branch) else None,
         "lam_last": float(branch.lam[-1]) if len(branch) else None,
         "components": {"names": ["x_j", "y_j", "x_d", "y_d"][:len(comps)], "state_indices": comps},
         "special": rows,
         "files": ["branch.npz", "branch.json", "cycles.json"] + figures,
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "figures": t_fig,
+                      "first_point": None if bar.t_first is None else bar.t_first - t0,
                       "total": time.perf_counter() - t0},
     }
     write_summary(out, "cycles.json", data)
-    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)
+    return interrupted_status(branch, ok, out, ck, NAME)

@@ -14,7 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from . import cycles as _cycles
-from ._common import output_dir, spec_from_args, traced_params, write_summary
+from ._checkpoints import checkpoint_folder, interrupted_status, resume_args
+from ._contact import contact_kwargs
+from ._common import output_dir, resolve_speeds, spec_from_args, traced_params, work_unit_J, write_summary
 
 NAME = "energy"
 
@@ -41,7 +43,7 @@ written); 2 for invalid input.
 
 EPILOG = """\
 units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); works per cycle in p0 R L c.
-Sign convention (DESIGN.md): positive = energy leaving the rotor into the films and foils.
+Sign convention (docs/model.md): positive = energy leaving the rotor into the films and foils.
 
 examples:
   gfbjax energy                                   reference system, Omega_bar 0.05 -> 1.0
@@ -62,8 +64,42 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                                          "(paper Fig. 12)",
                               description=DESCRIPTION, epilog=EPILOG, parents=[_cycle_options()], add_help=False,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--branch", type=Path, default=None, metavar="FILE",
+                   help="compute the works on a saved branch of unbalance-response cycles (branch.npz of 'gfbjax "
+                        "cycles' or 'gfbjax energy', which keep the states) instead of continuing one; its system "
+                        "and settings come from the file")
     p.set_defaults(func=run, out=Path("results") / NAME)
     return p
+
+
+def _saved_branch(args: argparse.Namespace) -> tuple[Any, Any, Any]:
+    """(branch, spec, params) of ``--branch``; ParameterError for a file that is not a GFB cycle branch with
+    states, or when system or numerics options are given with it."""
+    from ...cont import Branch, BranchFileError
+    from ...params import ParameterError, SystemSpec
+
+    given = [opt for opt, dest in (("--system", "system"), ("--set", "overrides"), ("--preset", "preset"),
+                                   ("--nx", "nx"), ("--nz", "nz"), ("--start", "start"), ("--end", "end"),
+                                   ("--N", "N"), ("--m", "m"), ("--resume", "resume"), ("--h-rub-um", "h_rub_um"),
+                                   ("--on-contact", "on_contact"))
+             if getattr(args, dest, None) != args.option_default(dest)]
+    if given:
+        raise ParameterError(f"--branch {args.branch}: the system and the settings come from the file; do not give "
+                             f"{', '.join(given)}")
+    try:
+        branch = Branch.load(args.branch)
+    except BranchFileError as exc:
+        raise ParameterError(f"--branch: {exc}") from None
+    meta = branch.meta or {}
+    if branch.kind != "cycles" or meta.get("problem") != "unbalance_response" or "spec" not in meta:
+        raise ParameterError(f"--branch {args.branch}: not a branch of unbalance-response cycles written by gfbjax "
+                             f"with its system (kind {branch.kind!r}, problem {meta.get('problem')!r})")
+    if branch.states is None:
+        raise ParameterError(f"--branch {args.branch}: the file holds no collocation states (it was saved without "
+                             "save_states); rerun 'gfbjax cycles', which keeps them")
+    names = {f.name for f in dataclasses.fields(SystemSpec)}
+    spec = SystemSpec(**{k: v for k, v in meta["spec"].items() if k in names})
+    return branch, spec, traced_params(spec)
 
 
 def identity_error(W_fu: Any, W_B: Any) -> float:
@@ -85,25 +121,42 @@ def run(args: argparse.Namespace) -> int:
     from ...analyses.energy import CycleEnergy, branch_energy, sign_changes
 
     t0 = time.perf_counter()
-    spec = spec_from_args(args)
-    settings = dataclasses.replace(_cycles._settings(args), save_states=True)  # the works need the orbits
-    out = output_dir(args)
-    params = traced_params(spec)
-    print(f"gfbjax energy: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
-          f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}", flush=True)
-    t1 = time.perf_counter()
-    progress = _cycles._SpeedBar(args.start, args.end, not args.quiet)
-    try:
-        branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=progress,
-                                     spec=spec)
-    except NoSolutionError as exc:  # no static equilibrium at the start speed: nothing to write
-        print(f"gfbjax energy: {exc}", flush=True)
-        return 1
-    finally:
-        progress.close()
+    ck = None
+    if args.branch is not None:
+        branch, spec, params = _saved_branch(args)
+        out = output_dir(args)
+        settings = None
+        lam = np.asarray(branch.lam, float)
+        args.start, args.end = (float(lam[0]), float(lam[-1])) if len(lam) else (math.nan, math.nan)
+        args.system = str(args.branch)
+        print(f"gfbjax energy: branch {args.branch} ({len(branch)} points, grid Nx={spec.Nx} Nz={spec.Nz})",
+              flush=True)
+        t1 = time.perf_counter()
+        ok = branch.outcome is Outcome.REACHED_END
+    else:
+        args = resume_args(args, NAME)
+        spec = spec_from_args(args)
+        resolve_speeds(args, spec, "--start", "--end")
+        settings = dataclasses.replace(_cycles._settings(args), save_states=True)  # the works need the orbits
+        out = output_dir(args)
+        params = traced_params(spec)
+        contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
+        ck = checkpoint_folder(args, out, NAME)
+        print(f"gfbjax energy: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
+              f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}", flush=True)
+        t1 = time.perf_counter()
+        progress = _cycles._SpeedBar(args.start, args.end, not args.quiet)
+        try:
+            branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=progress,
+                                         spec=spec, checkpoint=ck, **contact)
+        except NoSolutionError as exc:  # no static equilibrium at the start speed: nothing to write
+            print(f"gfbjax energy: {exc}", flush=True)
+            return 1
+        finally:
+            progress.close()
+        ok = _cycles.reached_end(branch, args.start, args.end)
+        branch.save(out / "branch")
     t_cont = time.perf_counter() - t1
-    ok = _cycles.reached_end(branch, args.start, args.end)
-    branch.save(out / "branch")
 
     t2 = time.perf_counter()
     if len(branch):
@@ -137,8 +190,9 @@ def run(args: argparse.Namespace) -> int:
 
         from ...plot.branch import plot_energy
 
-        fig = plot_energy([(f"system '{args.system}' (Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})",
-                            branch, E)], path=out / "energy.png")
+        label = (f"branch {args.branch}" if settings is None else
+                 f"system '{args.system}' (Nx={spec.Nx}, Nz={spec.Nz}, N={settings.N}, m={settings.m})")
+        fig = plot_energy([(label, branch, E)], spec=spec, path=out / "energy.png")
         plt.close(fig)
         figures.append("energy.png")
 
@@ -146,19 +200,23 @@ def run(args: argparse.Namespace) -> int:
         "command": NAME, "gfbjax_version": gfbjax.__version__, "outcome": str(branch.outcome), "message": branch.message,
         "range": {"start": args.start, "end": args.end, "reached_end": ok},
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
-        "settings": {k: getattr(settings, k) for k in ("m", "N", "ds", "ds_max", "dlam_max", "max_points",
-                                                        "locate", "save_states")},
-        "units": {"speed": "Omega_bar", "work": "p0 R L c per cycle"},
-        "points": [{"Omega_bar": float(lam[i]), "stable": bool(stable[i]), "W_fu": float(E.W_fu[i]),
-                    "W_B": float(E.W_B[i]), "W_cf": float(E.W_cf[i]), "W_cb": float(E.W_cb[i])}
+        "settings": ({"branch_file": str(args.branch)} if settings is None else
+                     {k: getattr(settings, k) for k in ("m", "N", "ds", "ds_max", "dlam_max", "max_points", "locate",
+                                                        "save_states")}),
+        "units": {"speed": "Omega_bar", "work": "p0 R L c per cycle", "rpm": "rev/min", "W_*_J": "J per cycle",
+                  "work_unit_J": work_unit_J(spec)},
+        "points": [{"Omega_bar": float(lam[i]), "rpm": spec.rpm(float(lam[i])), "stable": bool(stable[i]),
+                    "W_fu": float(E.W_fu[i]), "W_B": float(E.W_B[i]), "W_cf": float(E.W_cf[i]),
+                    "W_cb": float(E.W_cb[i]),
+                    **{f"{k}_J": float(getattr(E, k)[i]) * work_unit_J(spec) for k in ("W_fu", "W_B", "W_cf", "W_cb")}}
                    for i in range(len(lam))],
         "NS_Omega_bar": ns,
         "W_cb_sign_changes": zc,
         "max_rel_identity_error": ident,
         "special": _cycles.special_summary(branch, spec),
-        "files": ["branch.npz", "branch.json", "energy.json"] + figures,
+        "files": (["branch.npz", "branch.json"] if settings is not None else []) + ["energy.json"] + figures,
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "energy": t_energy,
                       "total": time.perf_counter() - t0},
     }
     write_summary(out, "energy.json", data)
-    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)
+    return interrupted_status(branch, ok, out, ck, NAME)

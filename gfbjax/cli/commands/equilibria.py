@@ -6,13 +6,14 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from ...cont import Outcome
 from ...limits import NoSolutionError
 from typing import Any
 
 from ...params import ParameterError
-from ._common import (add_system_options, check_continuation_options, check_option, output_dir, spec_from_args,
-                      traced_params, write_summary)
+from ._checkpoints import add_checkpoint_options, checkpoint_folder, interrupted_status, resume_args
+from ._contact import add_contact_options, contact_kwargs, contact_line, contact_summary
+from ._common import (add_speed_option, add_system_options, branch_row_um, check_continuation_options, check_option,
+                      output_dir, resolve_speeds, spec_from_args, speed_si, traced_params, write_summary)
 
 NAME = "equilibria"
 
@@ -49,8 +50,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_system_options(p, NAME)
     r = p.add_argument_group("speed range")
-    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
-    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
+    add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
     n = p.add_argument_group("numerics")
     n.add_argument("--ds", type=float, default=0.05, help="initial arclength step (default 0.05)")
     n.add_argument("--ds-max", type=float, default=0.5, help="largest arclength step (default 0.5)")
@@ -62,6 +63,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     o = p.add_argument_group("output")
     o.add_argument("--no-figures", action="store_true", help="no PNG figure")
     o.add_argument("--quiet", action="store_true", help="no progress output")
+    add_contact_options(p)
+    add_checkpoint_options(p)
     p.set_defaults(func=run)
     return p
 
@@ -96,6 +99,10 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
             d["frequency_hz"] = w / spec.t_star / (2 * math.pi)
             d["whirl_ratio"] = w / lam
             d["running_frequency_hz"] = lam / spec.t_star / (2 * math.pi)
+        si = speed_si(spec, lam)
+        if d["max_real_part"] is not None:
+            si["max_real_part_per_s"] = d["max_real_part"] / spec.t_star
+        d["SI"] = {**si, **branch_row_um(branch, s.index, spec)}
         out.append(d)
     return out
 
@@ -110,10 +117,14 @@ def run(args: argparse.Namespace) -> int:
     from .cycles import reached_end
 
     t0 = time.perf_counter()
+    args = resume_args(args, NAME)
     spec = spec_from_args(args)
+    resolve_speeds(args, spec, "--start", "--end")
     settings = _settings(args)
     out = output_dir(args)
     params = traced_params(spec)
+    contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
+    ck = checkpoint_folder(args, out, NAME)
     print(f"gfbjax equilibria: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, Omega_bar {args.start:g} -> "
           f"{args.end:g}", flush=True)
 
@@ -125,7 +136,8 @@ def run(args: argparse.Namespace) -> int:
 
     t1 = time.perf_counter()
     try:
-        branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb, spec=spec)
+        branch = continue_gfb_equilibria(params, args.start, args.end, settings, callback=cb, spec=spec,
+                                         checkpoint=ck, **contact)
     except NoSolutionError as exc:
         print(f"gfbjax equilibria: {exc}", flush=True)
         return 1
@@ -141,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
         f"  ended             {branch.outcome}: {branch.message}" + ("" if ok else "  (before the end of the range)"),
         f"  time              continuation {t_cont:.1f} s",
     ]
+    if len(branch) and branch.monitor is not None:
+        lines.append(contact_line(branch, spec))
     if not rows:
         lines.append("  special points    none")
     for d in rows:
@@ -170,7 +184,7 @@ def run(args: argparse.Namespace) -> int:
 
         from ...plot.branch import plot_equilibria
 
-        fig = plot_equilibria(branch, title=f"Equilibria of the balanced rotor, system '{args.system}'",
+        fig = plot_equilibria(branch, spec=spec, title=f"Equilibria of the balanced rotor, system '{args.system}'",
                               path=out / "equilibria.png")
         plt.close(fig)
         figures.append("equilibria.png")
@@ -178,18 +192,20 @@ def run(args: argparse.Namespace) -> int:
     data = {
         "command": NAME, "gfbjax_version": gfbjax.__version__,
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
-        "range": {"start": args.start, "end": args.end, "reached_end": ok},
+        "range": {"start": args.start, "end": args.end, "reached_end": ok,
+                  "start_rpm": spec.rpm(args.start), "end_rpm": spec.rpm(args.end)},
         "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "HOPF": sum(d["type"] == "HOPF" for d in rows),
                    "FOLD": sum(d["type"] == "FOLD" for d in rows)},
         "special": rows,
+        "film": contact_summary(branch, spec),
         "hopf_cycles": hopf,
         "files": ["branch.npz", "branch.json", "equilibria.json"] + (["hopf_cycles.npz", "hopf_cycles.json"]
                                                                      if hopf else []) + figures,
         "timings_s": {"setup": t1 - t0, "continuation": t_cont, "total": time.perf_counter() - t0},
     }
     write_summary(out, "equilibria.json", data)
-    return 130 if branch.outcome is Outcome.INTERRUPTED else (0 if ok else 1)
+    return interrupted_status(branch, ok, out, ck, NAME)
 
 
 def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, out: Any) -> dict:
@@ -202,7 +218,8 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     s = default_cycle_settings(ds=0.02, ds_max=2.0, dlam_max=0.005, max_points=args.hopf_cycles, lam_min=lo,
                                lam_max=hi)
     t0 = time.perf_counter()
-    cyc = continue_gfb_hopf_cycles(params, branch, 0, s, progress=not args.quiet, spec=spec)
+    cyc = continue_gfb_hopf_cycles(params, branch, 0, s, progress=not args.quiet, spec=spec,
+                                   **contact_kwargs(args, spec))
     cyc.save(out / "hopf_cycles")
     lam_h = float(branch.special_of("HOPF")[0].lam)
     amp = (cyc.xmax - cyc.xmin)[:, :2] / 2 if len(cyc) else np.zeros((0, 2))
@@ -212,7 +229,10 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     if past:
         i = past[0]
         first_past = {"Omega_bar": float(cyc.lam[i]), "rpm": spec.rpm(float(cyc.lam[i])),
-                      "amplitude_xj_c": float(amp[i, 0]), "amplitude_yj_c": float(amp[i, 1])}
+                      "amplitude_xj_c": float(amp[i, 0]), "amplitude_yj_c": float(amp[i, 1]),
+                      "amplitude_xj_um": float(amp[i, 0]) * spec.c * 1e6,
+                      "amplitude_yj_um": float(amp[i, 1]) * spec.c * 1e6,
+                      "whirl_frequency_Hz": 1.0 / (float(cyc.period[i]) * spec.t_star)}
     summary = {"criticality": crit, "points": len(cyc), "outcome": str(cyc.outcome), "message": cyc.message,
                "special": [{"type": sp.type, "Omega_bar": sp.lam, "rpm": spec.rpm(sp.lam), "located": sp.located}
                            for sp in cyc.special],
@@ -227,7 +247,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
 
         from ...plot.branch import plot_bifurcation
 
-        fig = plot_bifurcation(cyc, title=f"Self-excited cycles from the Hopf point, system '{args.system}'",
+        fig = plot_bifurcation(cyc, spec=spec, title=f"Self-excited cycles from the Hopf point, system '{args.system}'",
                                path=out / "hopf_cycles.png")
         plt.close(fig)
     return summary

@@ -11,8 +11,8 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError
-from ._common import (add_system_options, check_option, check_range, output_dir, spec_from_args, traced_params,
-                      write_summary)
+from ._common import (add_speed_option, add_system_options, check_option, check_range, output_dir, resolve_speeds,
+                      spec_from_args, speed_si, traced_params, work_unit_J, write_summary)
 
 NAME = "optimize"
 
@@ -78,14 +78,14 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     g.add_argument("--max-evals", type=int, default=None, metavar="E",
                    help="most cycle evaluations per speed, >= 1 (default: none; the optimiser's own stopping rules)")
     s = p.add_argument_group("speed: one speed (--speed) or an optimised continuation (--start, --end, --step)")
-    s.add_argument("--speed", type=float, default=None, metavar="OMEGA_BAR",
-                   help=f"optimise at this speed, in {limits.SPEED.interval()}")
-    s.add_argument("--start", type=float, default=None, metavar="OMEGA_BAR", help="first speed of the continuation")
-    s.add_argument("--end", type=float, default=None, metavar="OMEGA_BAR",
-                   help=f"last speed of the continuation, above --start, at most {limits.SPEED.hi:g}")
-    s.add_argument("--step", type=float, default=None, metavar="D_OMEGA",
-                   help=f"speed step of the continuation, in {limits.SPEED_STEP.interval()} "
-                        f"(default {DEFAULT_STEP:g})")
+    add_speed_option(s, "--speed", default=None, rpm_flag="--rpm",
+                     help=f"optimise at this speed, Omega_bar in {limits.SPEED.interval()}")
+    add_speed_option(s, "--start", default=None, help="first speed of the continuation, in Omega_bar")
+    add_speed_option(s, "--end", default=None,
+                     help=f"last speed of the continuation in Omega_bar, above --start, at most {limits.SPEED.hi:g}")
+    add_speed_option(s, "--step", default=None, metavar="D_OMEGA",
+                     help=f"speed step of the continuation in Omega_bar, in {limits.SPEED_STEP.interval()} "
+                          f"(default {DEFAULT_STEP:g})")
     n = p.add_argument_group("numerics (the collocation mesh of every cycle, as in gfbjax cycles)")
     n.add_argument("--m", type=int, default=4, metavar="M",
                    help=f"Gauss points per mesh interval, in {limits.COLLOCATION_M.interval()} (default 4)")
@@ -130,6 +130,8 @@ def check_options(args: argparse.Namespace, spec: Any) -> tuple[float, float]:
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     spec = spec_from_args(args)
+    resolve_speeds(args, spec, ("--speed", "--rpm"), "--start", "--end")
+    resolve_speeds(args, spec, "--step", rng=limits.SPEED_STEP)
     x0 = check_options(args, spec)
     out = output_dir(args)
     params = traced_params(spec)
@@ -191,6 +193,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
     data = {
         **meta, "Omega_bar": args.speed, "rpm": spec.rpm(args.speed),
         "alpha_f": opt.alpha_f, "eta": opt.eta, "objective_value": opt.value, "W_cb": ev.W_cb,
+        "W_cb_J": ev.W_cb * work_unit_J(spec), "running_frequency_Hz": speed_si(spec, args.speed)["running_frequency_Hz"],
         "max_mu": ev.max_mu, "stable": ev.stable, "energy": ev.energy._asdict(),
         "multiplier_moduli": mods[:8], "n_solves": opt.n_solves, "n_gradients": opt.n_gradients,
         "seconds": opt.seconds, "reason": opt.reason,
@@ -202,6 +205,8 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
 
 
 def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
+    import numpy as np
+
     from ...cont import Outcome
     from ...design.schedule import optimized_continuation
 
@@ -225,10 +230,15 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
     if not args.no_figures and sched.omega:
         from ...plot.branch import plot_schedule
 
-        fig = plot_schedule([(f"{args.objective}, {args.method}", sched)],
+        fig = plot_schedule([(f"{args.objective}, {args.method}", sched)], spec=spec,
                             title=f"Optimised foil along the speed, system '{args.system}' (Nx={spec.Nx}, "
                                   f"Nz={spec.Nz}, N={args.N}, m={args.m}; x: unstable)")
     data = {**meta, "range": {"start": args.start, "end": args.end, "step": step}, **sched.to_dict()}
+    data["SI"] = {"rpm": [spec.rpm(float(w)) for w in sched.omega],
+                  "W_cb_J": [float(v) * work_unit_J(spec) for v in sched.W_cb],
+                  "journal_max_um": [(np.asarray(a) * spec.c * 1e6).tolist() for a in sched.journal_max],
+                  "journal_min_um": [(np.asarray(a) * spec.c * 1e6).tolist() for a in sched.journal_min],
+                  "bifurcation_free_to_rpm": None if free is None else spec.rpm(free)}
     _finish(out, "schedule", data, fig, t0)
     return 0 if sched.outcome is Outcome.REACHED_END else 1
 

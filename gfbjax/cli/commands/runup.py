@@ -13,7 +13,8 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError, SystemSpec
-from ._common import add_system_options, check_option, check_range, output_dir, spec_from_args, traced_params, write_json
+from ._common import (add_speed_option, add_system_options, check_option, check_range, output_dir, resolve_speeds,
+                      spec_from_args, traced_params, write_json)
 
 NAME = "runup"
 
@@ -46,8 +47,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_system_options(p, NAME)
     r = p.add_argument_group("run-up")
-    r.add_argument("--start", type=float, default=0.05, metavar="OMEGA_BAR", help="start speed (default 0.05)")
-    r.add_argument("--end", type=float, default=1.0, metavar="OMEGA_BAR", help="end speed (default 1.0)")
+    add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
+    add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
     a = r.add_mutually_exclusive_group()
     a.add_argument("--revs", type=float, default=None, metavar="N",
                    help="revolutions from start to end speed, sets the acceleration (default 400; in "
@@ -90,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
 
     t_start = time.perf_counter()
     spec = spec_from_args(args)
+    resolve_speeds(args, spec, "--start", "--end")
     params = traced_params(spec)
     settings, settle_revs, revs = _check_run(args, params)
     overlay = _cycle_overlay(args.cycles, spec, args.system)  # before the long integration: a bad file fails fast
@@ -145,12 +147,12 @@ def run(args: argparse.Namespace) -> int:
 
         from ...plot.transient import plot_runup, plot_spectrogram
 
-        fig = plot_runup(res, overlay, c_um=c_um,
+        fig = plot_runup(res, overlay, c_um=c_um, spec=spec,
                          title=f"Run-up, system '{args.system}' (paper Fig. 7a/b)", path=out / "runup_response.png")
         plt.close(fig)
         figures.append("runup_response.png")
         if "y_j" in spectros:
-            fig = plot_spectrogram(spectros["y_j"], subsync=ranges["y_j"],
+            fig = plot_spectrogram(spectros["y_j"], subsync=ranges["y_j"], spec=spec,
                                    title=f"STFT of y_j, system '{args.system}' (paper Fig. 7c)",
                                    path=out / "runup_stft.png")
             plt.close(fig)
@@ -160,7 +162,12 @@ def run(args: argparse.Namespace) -> int:
         "command": NAME, "gfbjax_version": gfbjax.__version__,
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
         "run": res.summary(),
-        "subsynchronous": {k: [vars(r) for r in rs] for k, rs in ranges.items()},
+        "subsynchronous": {k: [{**vars(r), "SI": {
+            "rpm_start": spec.rpm(r.speed_start), "rpm_end": spec.rpm(r.speed_end),
+            "frequency_Hz": r.omega / spec.t_star / (2 * math.pi), "amplitude_um": r.amplitude * spec.c * 1e6}}
+            for r in rs] for k, rs in ranges.items()},
+        "range": {"start": args.start, "end": args.end, "start_rpm": spec.rpm(args.start),
+                  "end_rpm": spec.rpm(args.end)},
         "figures": figures, "total_s": time.perf_counter() - t_start,
     }
     write_json(out / "runup.json", data)
@@ -236,7 +243,7 @@ def _cycle_overlay(path: str | None, spec: SystemSpec, system: str = "") -> dict
 
 
 _GRID_FIELDS = ("Nx", "Nz")
-_UNBALANCE_FIELDS = ("G", "e_u", "omega_r")  # compared through the eccentricity they give
+_UNBALANCE_FIELDS = ("G", "e_u", "omega_r", "omega_r_unit")  # compared through the eccentricity they give
 
 
 def _system_differences(meta: dict, spec: SystemSpec) -> list[str] | None:
@@ -265,11 +272,14 @@ def _system_differences(meta: dict, spec: SystemSpec) -> list[str] | None:
 
 
 def _eccentricity(recorded: dict) -> float | None:
-    """The unbalance eccentricity e_u [m] of a recorded spec dict (e_u, else G / omega_r); None if unreadable."""
+    """The unbalance eccentricity e_u [m] of a recorded spec dict (e_u, else G / omega_r, omega_r in its recorded
+    omega_r_unit, rad/s when absent); None if unreadable."""
     e_u, G, omega_r = recorded.get("e_u"), recorded.get("G"), recorded.get("omega_r")
     if isinstance(e_u, (int, float)):
         return float(e_u)
     if isinstance(G, (int, float)) and isinstance(omega_r, (int, float)) and omega_r > 0:
+        if recorded.get("omega_r_unit", "rad/s") == "rpm":
+            omega_r = omega_r * 2 * math.pi / 60
         return G * 1e-3 / omega_r
     return None
 

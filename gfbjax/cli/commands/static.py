@@ -17,6 +17,7 @@ from ._common import (
     check_range,
     float_list,
     output_dir,
+    resolve_speeds,
     spec_from_args,
     traced_params,
     write_json,
@@ -113,7 +114,10 @@ def _operating_point(args: argparse.Namespace, spec: SystemSpec) -> tuple[float,
                                              unit="rev/min", what=f"Omega_bar in {limits.SPEED.interval()}")
         omega = spec.omega_bar(check_range("--rpm", args.rpm, rpm_range))
     else:
-        omega = check_range("--speed", DEFAULT_SPEED if args.speed is None else args.speed, limits.SPEED)
+        if args.speed is None:
+            args.speed = DEFAULT_SPEED
+        resolve_speeds(args, spec, ("--speed", "--rpm"))  # an rpm typed as --speed gets a hint
+        omega = args.speed
     fu = _force_unit(spec)
     if args.load is not None:  # the specific-load range in N per bearing
         load_range = limits.LOAD_W.with_bounds(hi=limits.LOAD_W.hi * fu, unit="N",
@@ -195,7 +199,7 @@ def compute_curves(spec: SystemSpec, alphas: list[float], speeds: list[float], l
     with tqdm(total=total, desc="load-displacement", unit="eq", disable=not progress, file=sys.stderr,
               dynamic_ncols=True) as bar:
         for a in alphas:
-            params = traced_params(spec.replace(alpha_f=a))
+            params = traced_params(spec.replace(alpha_f=a, load=0.0))  # curves: beyond gravity only
             curves[a] = {}
             for om in speeds:
                 bar.set_postfix_str(f"alpha_f={a:g} Omega={om:g}")
@@ -227,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
     out = output_dir(args)
     params = traced_params(spec)
 
-    res = solve_equilibrium(params, omega, w)
+    res = solve_equilibrium(params, omega, w_opt)  # the system's own load is in params already
     t_eq = time.perf_counter() - t_start
     print(format_summary(res, spec, args.system), flush=True)
 

@@ -1,0 +1,100 @@
+"""Checkpoints and ``--resume`` for the continuation commands (``cycles``, ``equilibria``).
+
+A run writes its options to ``OUT/<command>_args.json`` and appends every accepted point, with the state the next
+step starts from, to ``OUT/checkpoint/`` (:class:`gfbjax.cont.Checkpoint`).  ``--resume OUT`` runs the command
+again with the options of that run and continues its branch after the last point written: a kill (``kill -9``
+included) loses at most the point in progress, and the resumed branch equals an uninterrupted one.  A run without
+``--resume`` starts afresh: it clears ``OUT/checkpoint/``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+from ...params import ParameterError
+
+__all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interrupted_status", "FOLDER"]
+
+FOLDER = "checkpoint"
+
+# options that do not change the computed branch: a resumed run may set them anew
+_FREE = frozenset({"quiet", "no_figures", "resume", "no_checkpoint", "out"})
+
+
+def add_checkpoint_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--resume DIR`` and ``--no-checkpoint``."""
+    g = parser.add_argument_group("checkpoints")
+    g.add_argument("--resume", type=Path, default=None, metavar="DIR",
+                   help="continue the branch of an earlier run whose --out was DIR, after its last point, with that "
+                        "run's options (other options than --quiet/--no-figures are refused); the results are "
+                        "written to DIR")
+    g.add_argument("--no-checkpoint", action="store_true",
+                   help=f"do not append each point to OUT/{FOLDER}/ (then a killed run cannot be resumed)")
+    parser.set_defaults(option_default=parser.get_default)
+
+
+def _saved(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of a run that decide its branch, as JSON values."""
+    out = {}
+    for key, value in vars(args).items():
+        if key in _FREE or callable(value):
+            continue
+        out[key] = str(value) if isinstance(value, Path) else value
+    return out
+
+
+def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
+    """``args`` itself, or with ``--resume DIR`` the options of the run that wrote DIR (``--out`` = DIR).
+
+    ParameterError when DIR holds no such run, or when an option given now differs from that run's."""
+    if getattr(args, "resume", None) is None:
+        return args
+    folder = Path(args.resume)
+    if args.no_checkpoint:
+        raise ParameterError("--resume and --no-checkpoint exclude each other (a resumed run goes on writing its "
+                             "checkpoint)")
+    path = folder / f"{command}_args.json"
+    if not path.is_file() or not (folder / FOLDER).is_dir():
+        raise ParameterError(f"--resume {folder}: not the --out folder of a 'gfbjax {command}' run with checkpoints "
+                             f"(no {path.name} and {FOLDER}/ there)")
+    try:
+        saved = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ParameterError(f"--resume {folder}: {path.name} unreadable ({exc})") from None
+    if Path(args.out) != Path(args.option_default("out")) and Path(args.out) != folder:
+        raise ParameterError(f"--out {args.out}: a resumed run writes to its own folder, --resume {folder}")
+    given = {k: v for k, v in _saved(args).items() if v != args.option_default(k)}
+    clash = [k for k, v in given.items() if k in saved and saved[k] != v]
+    if clash:
+        opts = ", ".join(f"--{k.replace('_', '-')} {given[k]} (that run: {saved[k]})" for k in clash)
+        raise ParameterError(f"--resume {folder} continues that run with its own options; these differ: {opts}")
+    merged = argparse.Namespace(**{**vars(args), **saved})
+    merged.out = folder
+    return merged
+
+
+def checkpoint_folder(args: argparse.Namespace, out: Path, command: str) -> Path | None:
+    """The checkpoint folder of this run (None with ``--no-checkpoint``); writes ``<command>_args.json``.  A fresh
+    run (no ``--resume``) clears an old checkpoint in ``out``."""
+    folder = out / FOLDER
+    if getattr(args, "resume", None) is None and folder.exists():
+        shutil.rmtree(folder)
+    if args.no_checkpoint:
+        return None
+    (out / f"{command}_args.json").write_text(json.dumps(_saved(args), indent=1) + "\n")
+    return folder
+
+
+def interrupted_status(branch: Any, reached: bool, out: Path, folder: Path | None, command: str) -> int:
+    """Exit status of a continuation command: 130 when interrupted (printing how to resume), 0 when the branch
+    ``reached`` the end of the range, 1 when it ended before."""
+    from ...cont import Outcome
+
+    if branch.outcome is Outcome.INTERRUPTED:
+        if folder is not None:
+            print(f"gfbjax {command}: interrupted; continue with: gfbjax {command} --resume {out}", flush=True)
+        return 130
+    return 0 if reached else 1

@@ -1,0 +1,111 @@
+"""Mesh adaptation and the a-posteriori mesh error (trust issue, cases d and e).
+
+d. r' = r (1 - r^2), theta' = lam - cos(theta): stable cycles of period 2 pi / sqrt(lam^2 - 1), none for
+   lam <= 1.  Continued down from lam = 2 towards the infinite-period limit.
+e. x'' + 0.1 x' + x + 3 max(x - 0.5, 0) = 0.1 cos(omega t): folds of the resonance curve at omega =
+   1.0805948052 and 1.1445435815 (shooting with the kink located as an event, issue 12).
+"""
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_function
+from gfbjax.cont import _collocation as col
+from gfbjax.cont._mesh import error_estimate, interval_errors
+
+
+def snic(x, lam, args):
+    r2 = x[0] ** 2 + x[1] ** 2
+    th = lam - x[0] / jnp.sqrt(r2)  # theta' = lam - cos(theta)
+    return jnp.array([x[0] * (1 - r2) - x[1] * th, x[1] * (1 - r2) + x[0] * th])
+
+
+def _snic_start(st, lam0=2.0):
+    T0 = 2 * np.pi / np.sqrt(lam0 ** 2 - 1)
+    w = np.sqrt(lam0 ** 2 - 1)
+
+    def x_of_t(t):  # the exact cycle: tan(theta/2) = sqrt((lam+1)/(lam-1)) tan(w t / 2)
+        th = 2 * np.arctan(np.sqrt((lam0 + 1) / (lam0 - 1)) * np.tan(w * t * T0 / 2))
+        return np.stack([np.cos(th), np.sin(th)], -1)
+    return start_from_function(x_of_t, T0, lam0, st)
+
+
+def _snic_branch(adapt, points):
+    st = CycleSettings(m=4, N=20, ds=0.1, ds_max=1.0, direction=-1, lam_min=0.9, lam_max=2.5, max_points=points,
+                       save_states=True, adapt=adapt)
+    return continue_cycles(CycleProblem(snic, 2), st, _snic_start(st))
+
+
+@pytest.fixture(scope="module")
+def adapted():
+    return _snic_branch(3, 150)
+
+
+def test_infinite_period_limit_with_adaptive_mesh(adapted):
+    br = adapted
+    T_exact = 2 * np.pi / np.sqrt(br.lam ** 2 - 1)
+    assert br.period[-1] > 140 and np.all(br.lam > 1.0)  # far into the limit, and never past it
+    np.testing.assert_allclose(br.period, T_exact, rtol=2e-6)
+    assert np.all(br.stable) and np.max(br.trivial_error) < 1e-4
+
+
+def test_fixed_mesh_loses_the_period_and_says_so():
+    """The same branch on the uniform mesh: period errors above 1e-4 from T ~ 70 (the issue's 'before'), and the
+    points are flagged."""
+    br = _snic_branch(0, 75)
+    T_exact = 2 * np.pi / np.sqrt(br.lam ** 2 - 1)
+    err = np.abs(br.period - T_exact) / T_exact
+    assert np.max(err) > 1e-4
+    assert np.all(br.flagged[err > 1e-5])
+
+
+def test_error_estimate_matches_the_true_error(adapted):
+    """The estimate against the orbit's true error between its nodes (a tight time integration from the orbit's
+    own first node): within a factor of 4 either way."""
+    br, sch = adapted, col.Scheme(4)
+    for i in (0, 40, 100):
+        o = col.Orbit(*(jnp.asarray(br.states[k][i]) for k in ("mesh", "xm", "xi", "T", "lam")))
+        t, X = col.evaluate(o, sch, 16)
+        lam, T = float(o.lam), float(o.T)
+        ref = solve_ivp(lambda tt, x: np.asarray(snic(jnp.asarray(x), lam, None)), (0, T), X[0], t_eval=t * T,
+                        rtol=1e-12, atol=1e-13, method="DOP853").y.T
+        true = np.max(np.abs(X - ref))
+        est = np.max(interval_errors(o, sch))
+        assert true / 4 <= est <= 4 * true, (i, true, est)
+        assert error_estimate(o, sch) == pytest.approx(est / (1 + np.max(np.abs(np.asarray(o.xm)))))
+
+
+def kinked_oscillator(z, w, args):
+    x, v, u, s = z
+    r2 = u * u + s * s
+    return jnp.array([v, -0.1 * v - x - 3 * jnp.maximum(x - 0.5, 0.0) + 0.1 * u,
+                      u + w * s - u * r2, -w * u + s - s * r2])
+
+
+FOLDS = (1.0805948052, 1.1445435815)
+
+
+def _resonance(N, adapt):
+    w0 = 0.9
+    H = 0.1 / (1 - w0 ** 2 + 0.1j * w0)
+
+    def x_of_t(t):  # the linear response (the kink is not reached at w0)
+        e = np.exp(2j * np.pi * t)
+        return np.stack([np.real(H * e), np.real(1j * w0 * H * e), e.real, -e.imag], -1)
+    st = CycleSettings(m=4, N=N, ds=0.05, ds_max=0.3, lam_min=0.85, lam_max=1.3, max_points=150, adapt=adapt,
+                       detect=("LPC",))
+    return continue_cycles(CycleProblem(kinked_oscillator, 4), st, start_from_function(x_of_t, 2 * np.pi / w0, w0, st))
+
+
+@pytest.mark.slow
+def test_kink_folds_adaptive_vs_fixed():
+    fixed = _resonance(40, 0)
+    lpc = sorted(s.lam for s in fixed.special_of("LPC"))
+    assert len(lpc) == 2
+    assert abs(lpc[1] - FOLDS[1]) > 5e-5  # the issue's 'before': the kink inside an interval
+    # (not asserted, a known gap: the mesh estimate there is ~1e-5, below mesh_tol, so this error is not flagged)
+    adapted = _resonance(40, 3)
+    lpc = sorted(s.lam for s in adapted.special_of("LPC"))
+    assert len(lpc) == 2  # no spurious folds from re-meshing near the turning points
+    np.testing.assert_allclose(lpc, FOLDS, atol=3e-5)

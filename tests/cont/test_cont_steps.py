@@ -1,0 +1,53 @@
+"""Guarded steps: a corrector that jumps to another branch is caught and the step retried (trust issue, case h),
+and the tangent may not turn by more than ``max_angle`` in one step."""
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from gfbjax.cont import EquilibriumProblem, EquilibriumSettings, Outcome, continue_equilibria
+
+
+def imperfect_pitchfork(x, p, args):
+    """x' = 1e-4 + p x - x^3: the branch from x ~ 1e-4 at p = -1 bends sharply near p = 0 into x ~ sqrt(p); the
+    unstable middle branch x ~ -1e-4 / p lies close to the prediction made along the old tangent."""
+    return jnp.array([1e-4 + p * x[0] - x[0] ** 3])
+
+
+@pytest.mark.parametrize("ds_max", [0.05, 0.1, 0.2, 0.3, 0.5])
+def test_no_jump_to_the_middle_branch(ds_max):
+    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork, 1),
+                             EquilibriumSettings(ds=0.05, ds_max=ds_max, lam_min=-1.0, lam_max=1.0),
+                             np.array([1e-4]), -1.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    x = br.states["x"][:, 0]
+    # every point is the largest real root of x^3 - p x - 1e-4 (numpy.roots, independent of the continuation)
+    upper = [max(r.real for r in np.roots([1.0, 0.0, -p, -1e-4]) if abs(r.imag) < 1e-9) for p in br.lam]
+    np.testing.assert_allclose(x, upper, rtol=1e-8)
+    assert np.all(br.stable) and br.special == []  # one stable branch, no bifurcation on it
+
+
+def circle(x, p, args):
+    """x^2 + p^2 = 1: the tangent turns by the arc angle of each step."""
+    return jnp.array([x[0] ** 2 + p ** 2 - 1.0])
+
+
+def _arc_angles(max_angle):
+    st = EquilibriumSettings(ds=0.5, ds_max=1.8, max_points=12, fast_iter=10, grow=3.0, max_angle=max_angle)
+    br = continue_equilibria(EquilibriumProblem(circle, 1), st, np.array([1.0]), 0.0)
+    phi = np.unwrap(np.arctan2(br.states["x"][:, 0], br.lam))
+    return np.abs(np.diff(phi))
+
+
+def test_tangent_turn_is_capped():
+    assert np.max(_arc_angles(math.pi / 4)) <= math.pi / 4 + 1e-9
+    assert np.max(_arc_angles(math.pi / 8)) <= math.pi / 8 + 1e-9
+    assert np.max(_arc_angles(math.pi)) > math.pi / 4  # without the cap these steps turn further
+
+
+def test_bad_guard_settings_are_refused():
+    with pytest.raises(ValueError, match="max_angle"):
+        EquilibriumSettings(max_angle=0.0)
+    with pytest.raises(ValueError, match="event_refine"):
+        EquilibriumSettings(event_refine=-1)

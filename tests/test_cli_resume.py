@@ -1,0 +1,94 @@
+"""Fault test of the checkpoints: ``kill -9`` of ``gfbjax cycles`` and then ``--resume`` loses no point beyond the
+one in progress, and the final branch equals an uninterrupted run's (issue: long runs that lose nothing)."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from gfbjax.cont import Branch
+
+ARGS = ["cycles", "--nx", "16", "--nz", "2", "--N", "8", "--start", "0.3", "--end", "0.42", "--no-figures",
+        "--quiet"]
+
+
+def _gfbjax(args, env, **kw):
+    return subprocess.Popen([sys.executable, "-m", "gfbjax", *args], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, **kw)
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    # one compilation cache for the three runs: the second and third load the kernels the first compiled
+    return {**os.environ, "GFBJAX_CACHE_DIR": str(tmp_path_factory.mktemp("jax_cache"))}
+
+
+@pytest.mark.slow
+def test_kill_9_then_resume_equals_uninterrupted(tmp_path, env):
+    whole = _gfbjax([*ARGS, "--out", str(tmp_path / "whole")], env)
+    out_whole, _ = whole.communicate(timeout=900)
+    assert whole.returncode == 0, out_whole
+    ref = Branch.load(tmp_path / "whole" / "branch")
+    assert len(ref) >= 6 and [s.type for s in ref.special] == ["NS"], out_whole
+
+    run = tmp_path / "killed"
+    victim = _gfbjax([*ARGS, "--out", str(run)], env)
+    target = run / "checkpoint" / "step_00003.npz"
+    deadline = time.monotonic() + 900
+    while not target.exists() and victim.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert victim.poll() is None, "the run finished before it could be killed"
+    os.kill(victim.pid, signal.SIGKILL)
+    victim.communicate(timeout=60)
+    assert victim.returncode == -signal.SIGKILL
+    written = len(list((run / "checkpoint").glob("step_*.npz")))
+    assert 4 <= written < len(ref)
+    assert not (run / "branch.npz").exists()  # nothing was written at the end: the checkpoint is all there is
+
+    resumed = _gfbjax(["cycles", "--resume", str(run), "--quiet"], env)
+    out, _ = resumed.communicate(timeout=900)
+    assert resumed.returncode == 0, out
+    assert "resuming" in out
+    got = Branch.load(run / "branch")
+    assert got.outcome is ref.outcome and len(got) == len(ref)
+    for key in ("lam", "period", "l2", "xmax", "xmin", "trivial_error", "tangent_lam"):
+        np.testing.assert_allclose(getattr(got, key), getattr(ref, key), rtol=1e-8, atol=1e-10, err_msg=key)
+    np.testing.assert_allclose(np.abs(got.multipliers), np.abs(ref.multipliers), rtol=1e-8, atol=1e-10)
+    assert [(s.type, s.located) for s in got.special] == [(s.type, s.located) for s in ref.special]
+    np.testing.assert_allclose([s.lam for s in got.special], [s.lam for s in ref.special], rtol=1e-8)
+
+
+def test_resume_refuses_other_options(tmp_path, env):
+    from gfbjax.cli import main
+
+    (tmp_path / "checkpoint").mkdir()
+    (tmp_path / "cycles_args.json").write_text('{"N": 8, "nx": 16}')
+    assert main(["cycles", "--resume", str(tmp_path), "--N", "12"]) == 2
+    assert main(["cycles", "--resume", str(tmp_path), "--no-checkpoint"]) == 2
+    assert main(["cycles", "--resume", str(tmp_path / "nothing")]) == 2
+
+
+def test_bad_input_leaves_a_resumable_checkpoint_alone(tmp_path):
+    """Every option is checked before an old checkpoint is cleared (a fresh user's report: a bad --h-rub-um after
+    an interrupted run deleted it)."""
+    from gfbjax.cli import main
+
+    ck = tmp_path / "checkpoint"
+    ck.mkdir()
+    (ck / "step_00000.npz").write_bytes(b"kept")
+    assert main(["cycles", "--nx", "16", "--nz", "2", "--out", str(tmp_path), "--h-rub-um", "-5"]) == 2
+    assert (ck / "step_00000.npz").read_bytes() == b"kept"
+
+
+def test_damaged_checkpoint_is_a_one_line_error(tmp_path, capsys):
+    from gfbjax.cli import main
+
+    (tmp_path / "checkpoint").mkdir()
+    (tmp_path / "checkpoint" / "journal.json").write_text("{not json")
+    (tmp_path / "cycles_args.json").write_text('{"nx": 16, "nz": 2, "N": 8, "start": 0.3, "end": 0.32}')
+    assert main(["cycles", "--resume", str(tmp_path), "--quiet", "--no-figures"]) == 2
+    err = capsys.readouterr().err
+    assert "journal.json unreadable" in err and "Traceback" not in err
