@@ -92,3 +92,35 @@ def test_damaged_checkpoint_is_a_one_line_error(tmp_path, capsys):
     assert main(["cycles", "--resume", str(tmp_path), "--quiet", "--no-figures"]) == 2
     err = capsys.readouterr().err
     assert "journal.json unreadable" in err and "Traceback" not in err
+
+
+def test_resume_refuses_another_out(tmp_path):
+    from gfbjax.cli import main
+
+    (tmp_path / "checkpoint").mkdir()
+    (tmp_path / "cycles_args.json").write_text('{"N": 8, "nx": 16}')
+    assert main(["cycles", "--resume", str(tmp_path), "--out", str(tmp_path / "elsewhere")]) == 2
+
+
+def test_contact_summary_counts_the_located_contact():
+    """A branch that ended at the located contact: its last point is the contact (h_min = h_rub to rounding),
+    counted and named as such; a flagging branch counts the points at or below h_rub."""
+    import numpy as np
+    from types import SimpleNamespace
+
+    from gfbjax.cli.commands._contact import contact_summary
+
+    class Branch(SimpleNamespace):  # the attributes contact_summary reads
+        def __len__(self):
+            return len(self.lam)
+
+    spec = SimpleNamespace(c=38.1e-6)
+    stop = Branch(monitor=np.array([0.3, 0.1, 1e-9]), lam=np.array([0.2, 0.22, 0.233]),
+                           monitor_info={"minimum": 0.0, "stop": True}, outcome="contact")
+    d = contact_summary(stop, spec)
+    assert d["points_in_contact"] == 1 and d["first_contact_Omega_bar"] == 0.233
+    assert d["first_contact_is"] == "the located crossing"
+    flag = Branch(monitor=np.array([0.3, 0.1, -0.05, -0.1]), lam=np.array([0.2, 0.22, 0.24, 0.26]),
+                           monitor_info={"minimum": 0.0, "stop": False}, outcome="reached_end")
+    d = contact_summary(flag, spec)
+    assert d["points_in_contact"] == 2 and d["first_contact_Omega_bar"] == 0.24 and d["on_contact"] == "flag"
