@@ -199,19 +199,9 @@ def test_plot_schedule_marks_unstable_points(tmp_path):
 
     from gfbjax.design.schedule import Schedule
     from gfbjax.plot.branch import plot_schedule
+    from test_plot import schedule  # the plot tests' three-speed schedule (one unstable point)
 
-    s = Schedule("max_mu", "gradient")
-    for i, w in enumerate([0.3, 0.32, 0.34]):
-        mu = 0.9 + 0.06 * i
-        s.omega.append(w)
-        s.alpha_f.append(0.1 / (i + 1))
-        s.eta.append(0.05 * (i + 1))
-        s.W_cb.append(0.01 - 0.006 * i)
-        s.max_mu.append(mu)
-        s.stable.append(mu < 1.0)
-        s.journal_max.append(np.array([0.45, -0.45]) + 0.01 * i)
-        s.journal_min.append(np.array([0.4, -0.6]) - 0.01 * i)
-        s.multipliers.append(np.array([1.0, mu * np.exp(0.9j), mu * np.exp(-0.9j), 0.2]))
+    s = schedule()
     fig = plot_schedule([("a", s), ("empty", Schedule("W_cb", "pattern"))], path=tmp_path / "s.png")
     assert (tmp_path / "s.png").stat().st_size > 0
     assert len(fig.axes) == 6

@@ -210,6 +210,7 @@ class CycleCurve(Curve):
         self.solver = bind_solver(problem, scheme, settings)  # a bad choice raises here, before any work
         self.floquet = settings.floquet
         self.memo: dict[str, Any] = {}
+        self._lpc_scale = 0.0  # typical size of the fold test (see adapt)
         self.monitor = problem.monitor
         self.components = problem.components
         self._comps = jnp.asarray(self.components)
@@ -275,7 +276,7 @@ class CycleCurve(Curve):
         the correction fails."""
         every = self.settings.adapt
         if tests is not None:  # the typical size of the fold test, with a fading memory
-            self._lpc_scale = max(0.9 * getattr(self, "_lpc_scale", 0.0), abs(tests["LPC"]))
+            self._lpc_scale = max(0.9 * self._lpc_scale, abs(tests["LPC"]))
         if not every or count % every:
             return X, tau, X_prev, tests
         if tests is not None and abs(tests["LPC"]) < 0.2 * self._lpc_scale:

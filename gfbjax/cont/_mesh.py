@@ -28,6 +28,7 @@ any tangent) is carried to the new mesh by evaluating its piecewise polynomial a
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import jax.numpy as jnp
@@ -60,6 +61,7 @@ def _jump_rates(orbit: col.Orbit, scheme: col.Scheme) -> tuple[np.ndarray, np.nd
     return 0.5 * (left + right), h
 
 
+@functools.lru_cache(maxsize=None)
 def _node_polynomial_max(m: int) -> float:
     """max over s in [0, 1] of |prod_i (s - i/m)|: the Lagrange remainder's constant for m+1 equal nodes."""
     s = np.linspace(0.0, 1.0, 20001)

@@ -12,11 +12,12 @@ import argparse
 import json
 import shutil
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, NamedTuple
 
 from ...params import ParameterError
 
-__all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interrupted_status", "FOLDER"]
+__all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interrupted_status", "prepare_run", "Run",
+           "FOLDER"]
 
 FOLDER = "checkpoint"
 
@@ -98,3 +99,32 @@ def interrupted_status(branch: Any, reached: bool, out: Path, folder: Path | Non
             print(f"gfbjax {command}: interrupted; continue with: gfbjax {command} --resume {out}", flush=True)
         return 130
     return 0 if reached else 1
+
+
+class Run(NamedTuple):
+    """What a continuation command has checked and set up before its computation."""
+
+    args: argparse.Namespace
+    spec: Any
+    settings: Any
+    out: Path
+    params: Any
+    contact: dict[str, Any]
+    checkpoint: Path | None
+
+
+def prepare_run(args: argparse.Namespace, command: str, settings_of: Callable[[argparse.Namespace], Any]) -> Run:
+    """The set-up shared by ``cycles``, ``equilibria`` and ``energy``, in the order that loses nothing: the options
+    of a resumed run, the system, the speeds (rpm twins), the settings, the output folder and the contact options
+    are all checked before an old checkpoint in the output folder is cleared."""
+    from ._common import output_dir, resolve_speeds, spec_from_args, traced_params
+    from ._contact import contact_kwargs
+
+    args = resume_args(args, command)
+    spec = spec_from_args(args)
+    resolve_speeds(args, spec, "--start", "--end")
+    settings = settings_of(args)
+    out = output_dir(args)
+    params = traced_params(spec)
+    contact = contact_kwargs(args, spec)
+    return Run(args, spec, settings, out, params, contact, checkpoint_folder(args, out, command))

@@ -12,12 +12,10 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError
-from ._checkpoints import add_checkpoint_options, checkpoint_folder, interrupted_status, resume_args
-from ._contact import (accuracy_line, accuracy_summary, add_contact_options, contact_kwargs, contact_line,
-                       contact_summary)
+from ._checkpoints import add_checkpoint_options, interrupted_status, prepare_run
+from ._contact import accuracy_line, accuracy_summary, add_contact_options, contact_line, contact_summary
 from ._common import (add_speed_option, add_system_options, branch_row_um, check_continuation_options, check_option,
-                      check_range, output_dir, resolve_speeds, spec_from_args, speed_si, traced_params,
-                      write_summary)
+                      check_range, speed_si, write_summary)
 
 NAME = "cycles"
 
@@ -208,14 +206,7 @@ def run(args: argparse.Namespace) -> int:
     from ...analyses.cycles import continue_gfb_cycles, rotor_components
 
     t0 = time.perf_counter()
-    args = resume_args(args, NAME)
-    spec = spec_from_args(args)
-    resolve_speeds(args, spec, "--start", "--end")
-    settings = _settings(args)
-    out = output_dir(args)
-    params = traced_params(spec)
-    contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
-    ck = checkpoint_folder(args, out, NAME)
+    args, spec, settings, out, params, contact, ck = prepare_run(args, NAME, _settings)
     print(f"gfbjax cycles: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
           f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}"
           + (f", resuming {ck}" if args.resume is not None else ""), flush=True)

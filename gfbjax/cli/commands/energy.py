@@ -14,9 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from . import cycles as _cycles
-from ._checkpoints import checkpoint_folder, interrupted_status, resume_args
-from ._contact import contact_kwargs
-from ._common import output_dir, resolve_speeds, spec_from_args, traced_params, work_unit_J, write_summary
+from ._checkpoints import interrupted_status, prepare_run
+from ._common import output_dir, traced_params, work_unit_J, write_summary
 
 NAME = "energy"
 
@@ -134,14 +133,9 @@ def run(args: argparse.Namespace) -> int:
         t1 = time.perf_counter()
         ok = branch.outcome is Outcome.REACHED_END
     else:
-        args = resume_args(args, NAME)
-        spec = spec_from_args(args)
-        resolve_speeds(args, spec, "--start", "--end")
-        settings = dataclasses.replace(_cycles._settings(args), save_states=True)  # the works need the orbits
-        out = output_dir(args)
-        params = traced_params(spec)
-        contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
-        ck = checkpoint_folder(args, out, NAME)
+        # the works need the orbits: states are kept
+        args, spec, settings, out, params, contact, ck = prepare_run(
+            args, NAME, lambda a: dataclasses.replace(_cycles._settings(a), save_states=True))
         print(f"gfbjax energy: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
               f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}", flush=True)
         t1 = time.perf_counter()

@@ -10,10 +10,10 @@ from ...limits import NoSolutionError
 from typing import Any
 
 from ...params import ParameterError
-from ._checkpoints import add_checkpoint_options, checkpoint_folder, interrupted_status, resume_args
+from ._checkpoints import add_checkpoint_options, interrupted_status, prepare_run
 from ._contact import add_contact_options, contact_kwargs, contact_line, contact_summary
 from ._common import (add_speed_option, add_system_options, branch_row_um, check_continuation_options, check_option,
-                      output_dir, resolve_speeds, spec_from_args, speed_si, traced_params, write_summary)
+                      speed_si, write_summary)
 
 NAME = "equilibria"
 
@@ -117,14 +117,7 @@ def run(args: argparse.Namespace) -> int:
     from .cycles import reached_end
 
     t0 = time.perf_counter()
-    args = resume_args(args, NAME)
-    spec = spec_from_args(args)
-    resolve_speeds(args, spec, "--start", "--end")
-    settings = _settings(args)
-    out = output_dir(args)
-    params = traced_params(spec)
-    contact = contact_kwargs(args, spec)  # every input checked before an old checkpoint is cleared
-    ck = checkpoint_folder(args, out, NAME)
+    args, spec, settings, out, params, contact, ck = prepare_run(args, NAME, _settings)
     print(f"gfbjax equilibria: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, Omega_bar {args.start:g} -> "
           f"{args.end:g}", flush=True)
 
