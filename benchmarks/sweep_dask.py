@@ -34,6 +34,14 @@ ETA = [0.02, 0.05, 0.2, 0.5]
 FIGURES = ("hopf_omega_bar", "hopf_whirl_ratio", "cycles_loss_omega_bar", "cycles_points")
 
 
+def _cpu_seconds() -> float:
+    """CPU time of this process, all its threads, user + system [s]."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--nx", type=int, default=16)
@@ -54,9 +62,12 @@ def main() -> None:
     rows["warm_up_one_design_s"] = time.perf_counter() - t0
 
     with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), _cpu_seconds()
         serial = run_sweep(base, grid, analyses=analyses, out=Path(tmp) / "serial", progress=False)
         rows["serial_s"] = time.perf_counter() - t0
+        # cores the serial run kept busy (XLA:CPU spreads one design's kernels over its thread pool): with c busy
+        # cores of w, w processes can be at most w / c times faster
+        rows["serial_busy_cores"] = (_cpu_seconds() - cpu0) / rows["serial_s"]
 
         from distributed import Client
 
@@ -113,7 +124,7 @@ def main() -> None:
                        "grid": [a.nx, a.nz], "workers": a.workers}
     print(f"{'run':<34} {'seconds':>9}")
     print(f"{'warm-up (1 design, compiles)':<34} {rows['warm_up_one_design_s']:>9.1f}")
-    print(f"{f'serial, {n} designs':<34} {rows['serial_s']:>9.1f}")
+    print(f"{f'serial, {n} designs':<34} {rows['serial_s']:>9.1f}   busy cores {rows['serial_busy_cores']:.2f}")
     print(f"{f'Dask cluster start ({a.workers} processes)':<34} {rows['cluster_start_s']:>9.1f}")
     print(f"{f'Dask, {n} designs on {a.workers} workers':<34} {rows['dask_s']:>9.1f}   speed-up {rows['speedup']:.2f}x")
     print(f"{'  again, workers warm':<34} {rows['dask_warm_s']:>9.1f}   speed-up "

@@ -124,3 +124,28 @@ def test_contact_summary_counts_the_located_contact():
                            monitor_info={"minimum": 0.0, "stop": False}, outcome="reached_end")
     d = contact_summary(flag, spec)
     assert d["points_in_contact"] == 2 and d["first_contact_Omega_bar"] == 0.24 and d["on_contact"] == "flag"
+
+
+def test_special_points_in_contact_or_unresolved_are_flagged():
+    """With --on-contact flag a branch goes on past contact: a special point there is listed as FLAGGED (film
+    contact), and so is one on a point whose trivial multiplier or mesh error is above its tolerance."""
+    import numpy as np
+    from types import SimpleNamespace
+
+    from gfbjax.cli.commands.cycles import _row_flags, format_table
+
+    class Branch(SimpleNamespace):
+        def __len__(self):
+            return len(self.lam)
+
+    br = Branch(lam=np.array([0.2, 0.22, 0.24, 0.26]), monitor=np.array([0.3, 0.1, -0.05, -0.1]),
+                monitor_info={"minimum": 0.0, "stop": False}, accuracy_tol=1e-3,
+                trivial_error=np.array([1e-9, 1e-2, 1e-9, 1e-9]), mesh_tol=1e-4,
+                mesh_error=np.array([1e-6, 1e-6, 1e-6, 1e-3]))
+    assert _row_flags(br, 0) == []
+    assert _row_flags(br, 1) == ["trivial error"]
+    assert _row_flags(br, 2) == ["film contact"]
+    assert _row_flags(br, 3) == ["film contact", "mesh error"]
+    row = {"type": "NS", "Omega_bar": 0.24, "rpm": 9000.0, "multiplier_moduli": [1.0, 1.0], "located": True,
+           "flags": _row_flags(br, 2)}
+    assert "FLAGGED: film contact" in format_table([row])

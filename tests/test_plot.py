@@ -211,7 +211,7 @@ def test_bifurcation_overlay(several):
     top = fig.axes[0]
     labels = _legend(top)
     assert {"design A", "design B", "stable", "unstable"} <= set(labels)
-    assert {"NS", "PD (not located)", "inaccurate (trivial multiplier)"} <= set(labels)
+    assert {"NS", "PD (not located)", "flagged (accuracy or contact)"} <= set(labels)
     assert labels.count("NS") == 1  # one legend entry per special type, not per branch
     assert len(_colours(top, "-")) == 2 and _colours(top, "-") == _colours(top, "--")  # one colour each, both styles
     # special points: located filled, unlocated hollow; flagged points as grey crosses

@@ -183,9 +183,15 @@ class Branch:
             states = {key: np.stack([p.state[key] for p in points]) for key in points[0].state}
             if shared_state:
                 states.update(shared_state)
+        # A Floquet method may compute more multipliers at some points (Arnoldi reaching inside the unit circle):
+        # the rows keep the first point's count, the largest in modulus (padded with NaN where fewer)
+        mu = np.full((len(points), nmu), np.nan, complex)
+        for i, p in enumerate(points):
+            row = np.asarray(p.multipliers, complex)[:nmu]
+            mu[i, :row.size] = row
         return cls(kind, list(components), stack("lam"), stack("period"), stack("l2"),
                    stack("xmax", shape=(0, k)), stack("xmin", shape=(0, k)),
-                   stack("multipliers", complex, (0, nmu)), stack("stable", bool),
+                   mu, stack("stable", bool),
                    stack("trivial_error"), stack("newton_iterations", int), stack("ds"),
                    stack("tangent_lam"), list(special), Outcome(outcome), message, states, list(special_states), m,
                    accuracy_tol=accuracy_tol, monitor=None if monitor_info is None else stack("monitor"),

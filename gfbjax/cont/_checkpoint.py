@@ -40,7 +40,9 @@ from ._results import Outcome, SpecialPoint
 __all__ = ["Checkpoint", "CheckpointError", "Restored", "as_checkpoint"]
 
 FORMAT = "gfbjax.cont.Checkpoint"
-VERSION = 1
+#: 2: the BPC and NS test functions changed orientation and carry the UNSTABLE count; a version-1 folder's stored
+#: test values would fake a sign change at the first resumed step, so it is refused
+VERSION = 2
 
 _SCALARS = tuple(f.name for f in fields(PointRecord) if f.name not in ("xmax", "xmin", "multipliers", "state"))
 
@@ -117,7 +119,7 @@ class Checkpoint:
                 old = json.loads(journal.read_text())
             except (OSError, json.JSONDecodeError) as exc:
                 raise CheckpointError(f"checkpoint {self.folder}: journal.json unreadable ({exc})") from None
-            diff = [k for k in ("format", "kind", "settings") if old.get(k) != head[k]]
+            diff = [k for k in ("format", "version", "kind", "settings") if old.get(k) != head[k]]
             ident_old = old.get("identity", {})
             diff += [f"identity.{k}" for k in sorted(set(ident_old) | set(self.identity))
                      if _canonical(ident_old.get(k)) != _canonical(self.identity.get(k))]

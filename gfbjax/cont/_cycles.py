@@ -20,10 +20,11 @@ from . import _collocation as col
 from ._branch import Branch, PointRecord
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
-from ._events import classify, cycle_test_functions, detect, double_orbit_pd
+from ._events import classify, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
+from ._newton import LinearSolveError
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
 
@@ -204,6 +205,7 @@ class CycleCurve(Curve):
     """Periodic orbits of ``problem`` for the driver."""
 
     kind = "cycles"
+    event_weights = EVENT_WEIGHTS
 
     def __init__(self, problem: CycleProblem, settings: CycleSettings, scheme: col.Scheme, mesh: np.ndarray):
         self.problem, self.settings, self.scheme, self._mesh = problem, settings, scheme, mesh
@@ -235,6 +237,25 @@ class CycleCurve(Curve):
 
     def correct(self, pred, con):
         return self.solver.correct(pred, con, self.settings.newton)
+
+    def null_tangent(self, X):
+        # At a fold of cycles the Jacobian at fixed lam is singular, but that of the collocation equations and
+        # the phase condition in (orbit, T, lam) keeps a one-dimensional null space, the curve's tangent: bordered
+        # with any row r not orthogonal to it the system is regular, and its solution with r . t = 1 is t.
+        rng = np.random.default_rng(0)
+        r = col.Orbit(X.mesh, jnp.asarray(rng.standard_normal(X.xm.shape)),
+                      jnp.asarray(rng.standard_normal(X.xi.shape)), jnp.asarray(rng.standard_normal()),
+                      jnp.asarray(rng.standard_normal()))
+        try:
+            lin = self.solver.linearise(X, col.palc_constraint(X, r, 0.0, X))
+            t = lin.solve(np.zeros((X.N, self.scheme.m, X.n)), np.zeros(X.n), np.array([0.0, 1.0]))
+        except LinearSolveError:
+            return None
+        norm = float(jnp.sqrt(col.inner(t, t, self.scheme)))
+        if not np.isfinite(norm) or norm == 0.0:
+            return None
+        flat = np.asarray(t.to_flat())
+        return t.scale(float(np.sign(flat[np.argmax(np.abs(flat))])) / norm)
 
     def analyse(self, X, lin, tangent):
         an = analyse(self.problem, lin, self.floquet, self.memo)

@@ -17,7 +17,11 @@ One step from a converged point :math:`X_k` with unit tangent :math:`\tau_k`:
    ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual.  An event that
    cannot be located halves ds and retries the step (up to ``event_refine`` times): a corrector that jumped to
    another branch changes the sign of a test function without a zero between, and so does a test function the
-   step does not resolve; a shorter step either removes the spurious event or locates the real one;
+   step does not resolve; a shorter step either removes the spurious event or locates the real one.  The count
+   of halvings runs until the event is passed (a step that stops short of it does not restart it).  Branch points
+   (BP, BPC) whose localisation failed because the corrections close to them did not converge are not refined:
+   those corrections are singular next to a branch point, which says nothing about the step; they are reported
+   as not located;
 5. record, call the callback; grow ds after a fast correction.
 
 A step that reaches or crosses ``lam_min``/``lam_max`` is replaced by a correction at lam = the bound (from the
@@ -54,6 +58,9 @@ class Curve(abc.ABC):
     """What a branch is made of; implemented for cycles (:mod:`._cycles`) and equilibria (:mod:`._equilibria`)."""
 
     kind: str  # "cycles" | "equilibria"
+    #: events -> how many eigenvalues (multipliers) cross into the unstable side at each; with an "UNSTABLE"
+    #: count among the test data, a step whose count changes by more than its sign changes explain is refined
+    event_weights: dict[str, int] = {}
     monitor: Any = None  # the problem's Monitor (a physical bound); its value is the test "MONITOR" (value - min)
 
     # ---- vector space of the points (X = unknowns including lam)
@@ -292,7 +299,8 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             return Outcome.STOPPED, "stopped by the callback"
     else:
         X, tau, tests = X0, tau0, None
-    refined = 0  # halvings of the current step for an event that could not be located
+    refined = 0  # halvings for an event that could not be located, counted until the event is passed
+    ds_unrefined = ds  # the step before those halvings
     while len(run.points) < s.max_points:
         pred, con, ds, direction = algo.predict(c, X, X_prev, tau, ds, s.direction, s.dlam_max)
         sol, lin = c.correct(pred, con)
@@ -326,16 +334,24 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         if tests is not None and s.detect:
             found = [f for f in (_localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
                                  for kind in c.events(tests, tests_n, s.detect)) if f is not None]
-        if (any(not f.located for f in found) and s.locate and direction is not None and bound is None
-                and refined < s.event_refine and 0.5 * ds >= s.ds_min):
+        unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
+        if ((unlocated and s.locate and direction is not None or _unexplained(c, tests, tests_n))
+                and bound is None and refined < s.event_refine and 0.5 * ds >= s.ds_min):
             # an event that cannot be located: the step may have jumped to another branch (the test functions
             # then change sign without passing through zero), or the test function is not resolved; a shorter
-            # step tells the two apart
+            # step tells the two apart.  More crossings than sign changes: two events in one step cancelled in
+            # one test function (two Hopf pairs, a torus entering while another leaves); a shorter step
+            # separates them
+            if refined == 0:
+                ds_unrefined = ds
             ds, refined = 0.5 * ds, refined + 1
             continue
         for f in found:
             _insert(run, f)
-        refined = 0
+        if found or ds >= ds_unrefined:
+            # only now: a halved step that stops short of the event would otherwise restart the count, and the
+            # steps would creep towards an event the corrector cannot reach (a branch point) until ds < ds_min
+            refined = 0
         rec = c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
         X, tau, X_prev, tests = c.adapt(X, tau, X_prev, tests, len(run.points) + 1)
@@ -347,6 +363,21 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             return Outcome.REACHED_END, f"lam = {bound:.6g} reached (bounds [lam_min, lam_max] = [{s.lam_min:g}, " \
                                         f"{s.lam_max:g}])"
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
+
+
+#: Events at which the extended Jacobian itself is singular (a second branch through the point): the corrections
+#: that would locate them fail close to them, so one left unlocated *because those corrections failed* is no sign
+#: of a bad step and is not refined (one whose test function jumps still is: a jump to another branch).
+SINGULAR_EVENTS = ("BP", "BPC")
+
+
+def _unexplained(c: Curve, tests: dict | None, tests_n: dict) -> bool:
+    """More eigenvalues (multipliers) crossed into or out of the unstable side over the step than the test
+    functions' sign changes account for (whatever the detected events)."""
+    if tests is None or "UNSTABLE" not in tests or "UNSTABLE" not in tests_n or not c.event_weights:
+        return False
+    changed = c.events(tests, tests_n, tuple(c.event_weights))
+    return abs(tests_n["UNSTABLE"] - tests["UNSTABLE"]) > sum(c.event_weights[k] for k in changed)
 
 
 def _violates(c: Curve, tests: dict) -> bool:
@@ -401,6 +432,7 @@ class _Found:
     iterations: int = 0
     s: float = math.nan
     tangent_lam: float = math.nan
+    singular: bool = False  # not located because the corrections next to its zero failed (see _bracket)
 
 
 def _localise(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
@@ -420,11 +452,13 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
     """Drive the test function ``kind`` to zero between X (left) and Xn (regula falsi in the arclength)."""
     c, s = run.curve, run.s
     found = _Found(kind, Xn, an_n, False, math.nan, {})
+    failed = []
     if s.locate and tau is not None:
         def g(sv):
             pred = c.add(X, c.scale(tau, sv))
             sol, lin = c.correct(pred, c.palc_constraint(X, tau, sv, pred))
             if not sol.converged:
+                failed.append(sv)
                 return float("nan"), None
             a = c.analyse(sol.x, lin, sol.aux)
             tl = float(c.lam(sol.aux))
@@ -434,6 +468,10 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
         if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
             sol, an, tl = payload
             found = _Found(kind, sol.x, an, bool(located), float(val), {}, int(sol.iterations), sv, tl)
+    # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
+    # jump to another branch makes the test function change sign far from zero, with or without failures)
+    found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
+                      and abs(found.residual) <= 1e-3 * max(abs(tests[kind]), abs(tests_n[kind])))
     return found
 
 

@@ -104,6 +104,7 @@ def _hopf_factors(ev: np.ndarray):
 
 class EquilibriumCurve(Curve):
     kind = "equilibria"
+    event_weights = {"FOLD": 1, "BP": 1, "HOPF": 2}  # eigenvalues crossing the imaginary axis at each event
 
     def __init__(self, problem: EquilibriumProblem, settings: EquilibriumSettings):
         self.problem, self.settings = problem, settings
@@ -156,7 +157,8 @@ class EquilibriumCurve(Curve):
         return an
 
     def tests(self, an, tangent_lam):
-        out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"]}
+        out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"],
+               "UNSTABLE": float(np.sum(np.real(an["spectrum"]) > 0.0))}
         if self.monitor is not None:
             out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
         return out

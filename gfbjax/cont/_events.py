@@ -11,14 +11,19 @@ on one side of a line:
   many multipliers).  Its sign changes when a real multiplier crosses -1, and where a complex pair meets at -1 and
   splits into -r, -1/r (parametric resonance, e.g. the Mathieu tongues).  Two real multipliers below -1 that
   merge into a complex pair (or the reverse) leave it unchanged: no PD.
-* **BPC** (branch point of cycles): the same for :math:`\det(M - I)` over the non-trivial multipliers; its sign
+* **BPC** (branch point of cycles): the same for :math:`\det(I - M)` over the non-trivial multipliers; its sign
   changes when a real multiplier passes through +1.  At a fold of cycles a multiplier passes through +1 too, so a
   step in which the LPC test also changes sign reports the fold only (:func:`detect`).
-* **NS** (Neimark-Sacker / torus): the same for :math:`\prod_{i<j} (\mu_i\mu_j - 1)/(|\mu_i\mu_j| + 1)` over
+* **NS** (Neimark-Sacker / torus): the same for :math:`\prod_{i<j} (1 - \mu_i\mu_j)/(|\mu_i\mu_j| + 1)` over
   the non-trivial pairs (the bialternate product of M): zero when a complex pair crosses the unit circle
   (:math:`\mu\bar\mu = 1`), unchanged when multipliers collide on the real axis.  It also vanishes for two real
   multipliers with product 1 (a neutral saddle, not a bifurcation): :func:`classify` reports an NS only when the
   pair with product closest to 1 is complex, with its angle :math:`\arg\mu \in (0, \pi)`.
+
+Every factor is oriented to be positive for a multiplier (or pair) well inside the unit circle: (1 + mu),
+(1 - mu), (1 - mu_i mu_j).  With a partial spectrum (the k leading multipliers of :class:`~._floquet.Arnoldi`) the
+smallest computed multiplier enters and leaves the set as the spectrum moves; with the other orientation each such
+change flipped the sign of the product, and a spurious BPC or NS was reported where nothing crossed the circle.
 
 The set of non-trivial multipliers is made closed under conjugation first: next to a Hopf point the trivial
 multiplier and the amplitude multiplier form a nearly defective pair that round-off can split into
@@ -71,13 +76,21 @@ def signed_min(factors: np.ndarray) -> float:
 
 
 def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> dict[str, float]:
-    """The continuous test functions LPC, PD and NS of one point (module docstring)."""
+    """The continuous test functions LPC, PD, BPC and NS of one point (module docstring), and ``UNSTABLE``, the
+    number of non-trivial multipliers outside the unit circle (not a test function: the driver compares its change
+    over a step with the events found)."""
     nt = _conjugate_closed(nontrivial(mu, n_trivial))
     pp = _pair_products(nt)
     return {"LPC": float(tangent_lam),
             "PD": signed_min((nt + 1.0) / (np.abs(nt) + 1.0)),
-            "BPC": signed_min((nt - 1.0) / (np.abs(nt) + 1.0)),
-            "NS": signed_min((pp - 1.0) / (np.abs(pp) + 1.0))}
+            "BPC": signed_min((1.0 - nt) / (np.abs(nt) + 1.0)),
+            "NS": signed_min((1.0 - pp) / (np.abs(pp) + 1.0)),
+            "UNSTABLE": float(np.sum(np.abs(nt) > 1.0))}
+
+
+#: How many multipliers cross the unit circle at each event (for the driver's check that a step's sign changes
+#: account for every crossing: two crossings in one step cancel in a test function).
+EVENT_WEIGHTS = {"LPC": 1, "PD": 1, "BPC": 1, "NS": 2}
 
 
 def detect(prev: dict[str, float], cur: dict[str, float], kinds: tuple[str, ...]) -> list[str]:

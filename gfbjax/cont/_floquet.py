@@ -217,26 +217,46 @@ class TransferProduct(FloquetMethod):
 
 @dataclass(frozen=True)
 class Arnoldi(FloquetMethod):
-    """The ``k`` multipliers of largest modulus by ARPACK's implicitly restarted Arnoldi on the monodromy operator
-    (one sweep per product; the matrix is never formed).  tol: ARPACK's relative tolerance.  Along a branch the
+    """The ``k`` (or more) multipliers of largest modulus by ARPACK's implicitly restarted Arnoldi on the monodromy
+    operator (one sweep per product; the matrix is never formed).  tol: ARPACK's relative tolerance.  ``k`` is
+    doubled until the smallest computed multiplier has modulus below ``inside``: events happen on the unit circle,
+    and one at the edge of the computed set would be misread; once k would exceed n/2, all n multipliers are taken
+    from the explicit product of the transfer matrices instead (as :class:`TransferProduct`).  Along a branch the
     start vector is the sum of the previous point's Ritz vectors (the leading subspace moves little between
     points; saves about a quarter of the sweeps)."""
 
     k: int = 12
     tol: float = 1e-11
+    inside: float = 0.9
 
     def __post_init__(self) -> None:
         from ._problem import check_range
         check_range("Arnoldi k (number of multipliers)", self.k, 1, 10**6, integer=True)
         check_range("Arnoldi tol", self.tol, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range("Arnoldi inside", self.inside, 0.0, 1.0, lo_open=True, hi_open=True)
 
     def multipliers(self, lin, memo: dict) -> np.ndarray:
+        # Every bifurcation happens on the unit circle: the computed set must reach well inside it.  With k
+        # multipliers at or near the circle (a torus branch with several pairs outside) the critical pair can be
+        # the k-th, or split by the cut from its conjugate (then taken for a real multiplier at +1: a false BPC);
+        # so k grows until the smallest computed modulus is below ``inside``.
+        n = lin.orbit.n
+        k = int(min(self.k, n - 2))
+        while True:
+            if 2 * k > n:  # most of the spectrum: cheaper all at once, from the explicit product (n products)
+                mu = multipliers_product(lin.transfer_matrices())
+                return mu[np.argsort(-np.abs(mu), kind="stable")]
+            mu = self._leading(lin, memo, k)
+            if abs(mu[-1]) < self.inside:
+                return mu
+            k = 2 * k
+
+    def _leading(self, lin, memo: dict, k: int) -> np.ndarray:
         import scipy.sparse.linalg as spla
 
         from ._newton import LinearSolveError
 
         n = lin.orbit.n
-        k = int(min(self.k, n - 2))
         M = spla.LinearOperator((n, n), matvec=lin.monodromy_matvec, dtype=float)
         ones = np.ones(n) / np.sqrt(n)
         v0 = memo.get("arnoldi_start")

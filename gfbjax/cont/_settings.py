@@ -124,8 +124,11 @@ class CycleSettings(_StepSettings):
     retried with half the step (the corrector may have jumped to another branch, or the branch bends more sharply
     than the step resolves); a step with an event that cannot be located (its test function jumps: the signature
     of a jump between branches as much as of a coarse model) is retried with half the step up to
-    ``event_refine`` times before the event is reported as not located.  Neither check shrinks ds below
-    ``ds_min``.
+    ``event_refine`` times (counted until the event is passed) before the event is reported as not located; so
+    is a step over which more multipliers (eigenvalues) cross the unit circle (imaginary axis) than the sign
+    changes of the test functions account for (two events in one step cancel in a test function).  A branch
+    point whose localisation fails only next to it (the corrections are singular there) is reported unlocated
+    without refinement.  Neither check shrinks ds below ``ds_min``.
     Corrector: ``newton_tol`` (residual max-norm accepted after a small step), ``newton_step_tol`` (a step is small
     when |dx| <= tol (1 + max|x|)), ``newton_max_iter``.
     ``algorithm``: :class:`PseudoArclength` (default) or :class:`Natural`.

@@ -62,18 +62,21 @@ class IntervalSweeps(Linearisation):
     def sweep(self, dx0: np.ndarray, dp: np.ndarray, c: np.ndarray | None = None):
         """Mesh values (N+1, n) and interior values (N, m-1, n) of the linearised orbit from (dx0, dp), with
         collocation right-hand sides ``c`` (N, mn) (default 0)."""
-        k = (self.m - 1) * self.n
-        xs, ws = [dx0], []
-        x = dx0
+        N, k = len(self.lus), (self.m - 1) * self.n
+        xs = np.empty((N + 1, self.n))
+        ws = np.empty((N, k))
+        xs[0] = x = dx0
+        move_p = bool(np.any(dp))  # a homogeneous sweep (M v, Arnoldi) skips the parameter columns
         for j, lu in enumerate(self.lus):
-            rhs = -(self.AL[j] @ x) - self.Bp[j] @ dp
+            rhs = self.AL[j] @ x
+            if move_p:
+                rhs += self.Bp[j] @ dp
             if c is not None:
-                rhs = rhs + c[j]
-            z = lu.solve(rhs)
-            ws.append(z[:k])
-            x = z[k:]
-            xs.append(x)
-        return np.array(xs), np.array(ws).reshape(len(self.lus), self.m - 1, self.n)
+                rhs -= c[j]
+            z = lu.solve(-rhs)
+            ws[j] = z[:k]
+            xs[j + 1] = x = z[k:]
+        return xs, ws.reshape(N, self.m - 1, self.n)
 
     def adjoint_sweep(self, w: np.ndarray) -> np.ndarray:
         """psi (N, mn) with sum_j psi_j . c_j = w . x_N for the sweep from x_0 = 0, dp = 0 with right-hand sides c:

@@ -646,6 +646,7 @@ def minimize_log_box(
     max_evals: int | None = None,
     g_tol: float = 1e-7,
     z_tol: float = 1e-6,
+    f_rtol: float = 0.0,
     max_backtracks: int = 8,
     failures: tuple[type[Exception], ...] = (),
     callback: Callback | None = None,
@@ -664,7 +665,9 @@ def minimize_log_box(
     (KKT) condition at once.
 
     Stopping rules (``reason``): ``"kkt"`` — infinity norm of the free gradient in z below ``g_tol * max(1, |f|)``;
-    ``"z_tol"`` — accepted step below ``z_tol``; ``"max_iter"``, ``"max_evals"``, ``"backtrack_failed"``,
+    ``"z_tol"`` — accepted step below ``z_tol``; ``"f_rtol"`` (only with ``f_rtol > 0``; off by default) — an
+    accepted step gained at most ``f_rtol * |f|``, which ends the crawl along the ridge of a kink of the objective
+    where the gradient never vanishes; ``"max_iter"``, ``"max_evals"``, ``"backtrack_failed"``,
     ``"start_failed"``, ``"callback"``, ``"interrupted"`` as in :func:`minimize_bounded`.
 
     Every call of ``fun_and_grad`` counts as one evaluation and one gradient.
@@ -676,6 +679,7 @@ def minimize_log_box(
     max_step = _positive("max_step", max_step)
     max_iter = _count("max_iter", max_iter, 1)
     max_evals = _count("max_evals", max_evals, 1, optional=True)
+    f_rtol = _nonneg("f_rtol", f_rtol)
     zl, zh = np.log(lo_), np.log(hi_)
     opt = optimizer if optimizer is not None else optax.scale_by_lbfgs()
     hist: list[GradientEvaluation] = []
@@ -740,6 +744,7 @@ def minimize_log_box(
             else:
                 return result(z, f, g, "backtrack_failed")
             step = float(np.max(np.abs(zn - z)))
+            gain = f - fn
             z, f, g = zn, fn, gn
             trace.append(f)
             if bar is not None:
@@ -749,6 +754,8 @@ def minimize_log_box(
                 return result(z, f, g, "callback")
             if step < z_tol:
                 return result(z, f, g, "z_tol")
+            if f_rtol > 0 and gain <= f_rtol * abs(f):
+                return result(z, f, g, "f_rtol")
     except KeyboardInterrupt:
         return result(z, f, g, "interrupted")
     finally:

@@ -171,3 +171,38 @@ def test_callback_stop_and_user_errors_propagate(sl_branch):
 
     with pytest.raises(ValueError, match="shape mismatch"):
         continue_cycles(CycleProblem(bad_field, 2, jnp.asarray(W)), st, start_from_branch(sl_branch, 3))
+
+
+def bautin_radial(x, lam, w):
+    """r' = r (lam + 2 r^2 - r^4), theta' = w in the plane: cycles r^2 = 1 +- sqrt(1 + lam), a fold of cycles at
+    (lam, r) = (-1, 1), stable outside (r > 1), unstable inside."""
+    r2 = x[0] ** 2 + x[1] ** 2
+    g = lam + 2.0 * r2 - r2 ** 2
+    return jnp.array([g * x[0] - w * x[1], w * x[0] + g * x[1]])
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_cycle_branch_starts_at_a_fold(direction):
+    """Trust case f for cycles: started from the fold's orbit (r = 1) at lam = -1.0005, where no cycle exists and
+    fixing lam cannot converge, the start is corrected along the null tangent onto the fold and the branch leaves
+    it: one direction gives the stable half r > 1, the other the unstable half r < 1, both on r^4 - 2 r^2 = lam
+    (closed form).  Before, the start failed (START_FAILED)."""
+    from gfbjax.cont import start_from_function
+    w = 1.0
+    st = CycleSettings(m=4, N=20, ds=0.05, ds_max=0.1, max_points=8, direction=direction, save_states=True)
+    prob = CycleProblem(bautin_radial, 2, jnp.asarray(w))
+    start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                2 * np.pi / w, -1.0005, st)
+    br = continue_cycles(prob, st, start)
+    assert len(br) == 8, br.message
+    xm = np.asarray(br.states["xm"])  # (points, N + 1, 2) mesh values: on a circle of radius r
+    r = np.sqrt(np.mean(xm[..., 0] ** 2 + xm[..., 1] ** 2, axis=1))
+    np.testing.assert_allclose(br.lam, r ** 4 - 2 * r ** 2, atol=1e-8)
+    np.testing.assert_allclose(br.period, 2 * np.pi / w, rtol=1e-9)
+    # the start is the fold itself: it may be reported as a located LPC there (a row at lam = -1), nothing else
+    assert all(sp.type == "LPC" and sp.located and abs(sp.lam + 1.0) < 1e-8 for sp in br.special)
+    away = np.abs(br.lam + 1.0) > 1e-6
+    assert abs(br.lam[0] + 1.0) < 1e-6 and away.sum() >= 5
+    sides = np.sign(r[away] - 1.0)
+    assert np.all(sides == sides[0])
+    assert np.all(br.stable[away] == (sides[0] > 0))

@@ -198,3 +198,45 @@ def test_branch_point_of_cycles_is_reported():
     bpc = br.special[0]
     assert bpc.located and abs(bpc.lam) < 1e-8
     assert np.all(br.stable[br.lam < -1e-9]) and not np.any(br.stable[br.lam > 1e-9])
+
+
+def close_hopf_pairs(x, lam, gap):
+    """Two Hopf normal forms with Hopf points at lam = 1 (omega 1.0) and lam = 1 + gap (omega 1.7)."""
+    def hopf(a, b, s, w):
+        r2 = a * a + b * b
+        return s * a - w * b - a * r2, w * a + s * b - b * r2
+    d1, d2 = hopf(x[0], x[1], lam - 1.0, 1.0)
+    d3, d4 = hopf(x[2], x[3], lam - 1.0 - gap, 1.7)
+    return jnp.stack([d1, d2, d3, d4])
+
+
+def test_two_hopf_points_in_one_step_are_both_found():
+    """Hopf points at lam = 1 and 1.03 with steps of 0.2 (points at 0.85 and 1.05): the Hopf test function changes
+    sign twice within the step and ends with its old sign.  The count of eigenvalues in the right half plane
+    changes by 4 without a sign change to explain it; the step is shortened until each crossing has its own.
+    Before, neither Hopf point was reported (and which were depended on where the branch started)."""
+    br = continue_equilibria(EquilibriumProblem(close_hopf_pairs, 4, jnp.asarray(0.03)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5), np.zeros(4), 0.05)
+    hs = br.special_of("HOPF")
+    assert [round(h.lam, 9) for h in hs] == [1.0, 1.03], br.special
+    assert all(h.located for h in hs)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-9)
+
+
+def test_cycle_tests_ignore_which_small_multipliers_are_computed():
+    """With a partial spectrum (Arnoldi's k leading multipliers) the smallest computed multiplier enters and leaves
+    the set from point to point.  That must not change the sign of any test function: nothing crosses the unit
+    circle.  Before, the factors (mu - 1) and (mu_i mu_j - 1) were negative for every small real multiplier (pair),
+    so each such change flipped BPC or NS and a branch point or torus was reported where there was none (seen on
+    the Brusselator with the sparse solver: a "BPC" at a torus)."""
+    from gfbjax.cont._events import cycle_test_functions
+
+    core = [1.0, 1.2 + 0.8j, 1.2 - 0.8j, 1.1, -1.3, 0.6 + 0.3j, 0.6 - 0.3j, 0.4]  # trivial first
+    tails = ([], [0.05], [0.05, -0.03], [0.04 + 0.02j, 0.04 - 0.02j], [0.05, 0.04 + 0.02j, 0.04 - 0.02j])
+    signs = {k: set() for k in ("PD", "BPC", "NS")}
+    for tail in tails:
+        t = cycle_test_functions(np.array(core + tail, complex), 1, 0.3)
+        for k in signs:
+            signs[k].add(np.sign(t[k]))
+        assert t["UNSTABLE"] == 4  # 1.2 +- 0.8i, 1.1, -1.3
+    assert all(len(v) == 1 for v in signs.values()), signs

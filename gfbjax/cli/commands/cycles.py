@@ -137,7 +137,24 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
         if "ns_frequency_ratio" in d:
             si["ns_frequency_Hz"] = d["ns_frequency_ratio"] * si["running_frequency_Hz"]
         d["SI"] = {**si, **branch_row_um(branch, s.index, spec)}
+        d["flags"] = _row_flags(branch, s.index)
         out.append(d)
+    return out
+
+
+def _row_flags(branch: Any, i: int) -> list[str]:
+    """Why the branch row of a special point is flagged: "film contact" (the model does not apply there: the point
+    is not physical), "trivial error", "mesh error" (not resolved: the location and the label are unreliable)."""
+    if not 0 <= i < len(branch):
+        return []
+    out = []
+    info = branch.monitor_info or {}
+    if branch.monitor is not None and "minimum" in info and float(branch.monitor[i]) <= float(info["minimum"]):
+        out.append("film contact")
+    if branch.accuracy_tol is not None and float(branch.trivial_error[i]) > branch.accuracy_tol:
+        out.append("trivial error")
+    if branch.mesh_error is not None and branch.mesh_tol is not None and float(branch.mesh_error[i]) > branch.mesh_tol:
+        out.append("mesh error")
     return out
 
 
@@ -149,8 +166,9 @@ def format_table(rows: list[dict[str, Any]]) -> str:
     for d in rows:
         mods = ", ".join(f"{v:.4f}" for v in d["multiplier_moduli"][:3])
         ang = f"{d['ns_angle_rad']:.4f} rad" if "ns_angle_rad" in d else ""
+        flags = f"  FLAGGED: {', '.join(d['flags'])}" if d.get("flags") else ""
         lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {d['rpm']:>9.0f}  {mods:<30} {ang:>12}  "
-                     f"{'yes' if d['located'] else 'no'}")
+                     f"{'yes' if d['located'] else 'no'}{flags}")
     return "\n".join(lines)
 
 

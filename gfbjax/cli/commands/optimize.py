@@ -40,7 +40,9 @@ history of evaluations) and optimum.png (objective per evaluation; the path in t
 
 Optimised continuation (--start, --end, --step): optimise at each speed from the previous optimum and cycle, then
 step the speed; the march stops at the first speed whose optimised cycle is unstable (no admissible foil keeps it
-stable) or where no cycle converges.  Writes schedule.json (per speed the optimum, W_cb, max|mu|, stability, the
+stable) or where no cycle converges.  With --method gradient each speed starts from the optimum and cycle
+extrapolated from the last optima and carries the optimiser's curvature model over (far fewer cycle solves;
+gfbjax.design.predictor).  Writes schedule.json (per speed the optimum, W_cb, max|mu|, stability, the
 journal orbit's extent and the multipliers; the last speed with a stable optimised cycle) and schedule.png
 (paper Figs. 16-19).
 Exit status: 0 on success (one speed: an optimum found; continuation: --end reached), 1 when no cycle converged
