@@ -119,7 +119,11 @@ class Checkpoint:
                 old = json.loads(journal.read_text())
             except (OSError, json.JSONDecodeError) as exc:
                 raise CheckpointError(f"checkpoint {self.folder}: journal.json unreadable ({exc})") from None
-            diff = [k for k in ("format", "version", "kind", "settings") if old.get(k) != head[k]]
+            if old.get("format") == head["format"] and old.get("version") != head["version"]:
+                raise CheckpointError(f"checkpoint {self.folder} has format version {old.get('version')}, this "
+                                      f"gfbjax writes version {head['version']} (its test functions differ): it "
+                                      "cannot be resumed; rerun without resuming, or use a new folder")
+            diff = [k for k in ("format", "kind", "settings") if old.get(k) != head[k]]
             ident_old = old.get("identity", {})
             diff += [f"identity.{k}" for k in sorted(set(ident_old) | set(self.identity))
                      if _canonical(ident_old.get(k)) != _canonical(self.identity.get(k))]

@@ -290,6 +290,11 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             if not sol.converged:
                 return Outcome.START_FAILED, f"start point did not converge, not even along its null tangent " \
                                              f"({sol.outcome})"
+            moved = abs(c.lam(sol.x) - c.lam(X0))
+            if moved > s.ds:  # no fold next to the start: the correction found another part of the curve
+                return Outcome.START_FAILED, (f"start point did not converge at lam = {c.lam(X0):.6g}; along its "
+                                              f"null tangent it went to lam = {c.lam(sol.x):.6g}, farther than "
+                                              f"ds = {s.ds:g}: no solution (and no fold) next to the start")
             X, tau = sol.x, c.scale(sol.aux, float(s.direction))
         an = c.analyse(X, lin, tau)
         tests = c.tests(an, run.tangent_lam(tau))
@@ -340,8 +345,8 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             # an event that cannot be located: the step may have jumped to another branch (the test functions
             # then change sign without passing through zero), or the test function is not resolved; a shorter
             # step tells the two apart.  More crossings than sign changes: two events in one step cancelled in
-            # one test function (two Hopf pairs, a torus entering while another leaves); a shorter step
-            # separates them
+            # one test function (two pairs leaving the circle); a shorter step separates them.  Not caught: a
+            # pair leaving while another enters in the same step (the count does not change)
             if refined == 0:
                 ds_unrefined = ds
             ds, refined = 0.5 * ds, refined + 1

@@ -115,3 +115,18 @@ def test_folder_of_another_problem_or_start_is_refused(tmp_path):
                      (EquilibriumProblem(shifted, 1, 1e-4), [2e-4])):
         with pytest.raises(CheckpointError, match="identity"):
             continue_equilibria(prob, st, np.array(x0), -1.0, checkpoint=tmp_path)
+
+
+def test_folder_of_an_older_format_is_refused_with_its_reason(tmp_path):
+    """A folder written before the test functions changed orientation (format version 1) would fake a sign change
+    at the first resumed step: it is refused, and the message says why (not "another continuation")."""
+    import json
+
+    prob = EquilibriumProblem(two_hopf_pairs, 4)
+    continue_equilibria(prob, EQ, np.zeros(4), 0.0, checkpoint=tmp_path, callback=_interrupt_at(3))
+    journal = tmp_path / "journal.json"
+    head = json.loads(journal.read_text())
+    head["version"] = 1
+    journal.write_text(json.dumps(head))
+    with pytest.raises(CheckpointError, match="format version 1"):
+        continue_equilibria(prob, EQ, np.zeros(4), 0.0, checkpoint=tmp_path)

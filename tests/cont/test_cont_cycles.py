@@ -206,3 +206,17 @@ def test_cycle_branch_starts_at_a_fold(direction):
     sides = np.sign(r[away] - 1.0)
     assert np.all(sides == sides[0])
     assert np.all(br.stable[away] == (sides[0] > 0))
+
+
+def test_start_without_a_solution_nearby_fails_instead_of_moving():
+    """Asked to start at lam = -1.5, where the radial equation has no cycle and no fold is near (the fold is at -1),
+    the start fails; before, the correction along the null tangent ran off to lam = -0.28 and the branch was
+    returned as if it started there."""
+    from gfbjax.cont import Outcome, start_from_function
+    st = CycleSettings(m=4, N=20, ds=0.05, ds_max=0.1, max_points=8)
+    prob = CycleProblem(bautin_radial, 2, jnp.asarray(1.0))
+    start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                2 * np.pi, -1.5, st)
+    br = continue_cycles(prob, st, start)
+    assert br.outcome is Outcome.START_FAILED and len(br) == 0, br.message
+    assert "farther than" in br.message or "did not converge" in br.message
