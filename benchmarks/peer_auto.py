@@ -479,7 +479,7 @@ def print_tables(recs: list[dict[str, Any]]) -> None:
               f"{f(dan, '.2e')} | {f(ae, '.4f')} | {ge['wall_s']:.3f} ({ge['compile_s']:.1f}) |")
 
     print("\n### Cycle branch from the Hopf point (N = 20, m = 4, fixed mesh, multipliers at every point)\n")
-    print("| n | tool | points | L reached | Newton its | branch [s] | s/point | x AUTO | compile [s] |")
+    print("| n | tool | points | L reached | Newton its | branch [s] | s/point | time / AUTO (>1: slower) | compile [s] |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in recs:
         au = (r["auto"] or {}).get("cycles")
@@ -504,6 +504,8 @@ def print_tables(recs: list[dict[str, Any]]) -> None:
                   f"{f(au and au['trivial_error'], '.1e')} / {f(gf and gf['trivial_error'], '.1e')} |")
 
     print("\n### Special points on the cycle branch\n")
+    print("(each tool over its own L range, column 'L reached' above: a point beyond the other tool's range is no "
+          "disagreement; rerun with --L-end for a common range)\n")
     print("| n | tool | special points (type at L) |")
     print("|---|---|---|")
     for r in recs:
