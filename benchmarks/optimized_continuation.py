@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 
 import gfbjax
-import numpy as np
 
 from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
 from gfbjax.design.schedule import optimized_continuation

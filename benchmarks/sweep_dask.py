@@ -1,7 +1,8 @@
 """A 16-design sweep (4 alpha_f x 4 eta; the Hopf speed from the equilibria branch plus a short unbalance-response
 cycle branch per design) run serially in this process and on a local Dask cluster of 2 single-threaded worker
-processes (gfbjax.sweep.run_sweep); and, for comparison, W_cb over a small foil grid by the vmapped batch
-(gfbjax.design.maps.energy_map) and by a Python loop (energy_map_loop).
+processes, each bound to its own core (gfbjax.sweep.run_sweep); and, for comparison, W_cb over a small foil grid
+by the vmapped batch (gfbjax.design.maps.energy_map) and by a Python loop (energy_map_loop).  The serial sweep is
+also run with this process bound to one core: what one pinned worker can do, so the bound on the speed-up.
 
 Order, so that compilation is not counted as sweep time: one design is computed first in this process (compiles
 the kernels and fills the persistent compilation cache); the serial sweep then reuses this process's compiled
@@ -9,7 +10,8 @@ kernels; the cluster is started (timed on its own) and its workers load the kern
 their first design (counted in the Dask sweep: a fresh worker always pays it).  Both sweeps must give the same
 numbers (checked to 1e-10).
 
-Usage:  python benchmarks/sweep_dask.py [--nx 16 --nz 2] [--workers 2] [--no-maps] [--quick]
+Usage:  python benchmarks/sweep_dask.py [--nx 16 --nz 2] [--workers 2] [--cycle-points 10]
+        [--cycle-range 0.3 0.45] [--no-maps] [--quick]
 Writes benchmarks/results/sweep_dask.json (``--quick``: a 2 x 2 grid, no maps, a check that the script runs; give
 it another ``--out``).
 """
@@ -19,6 +21,8 @@ import argparse
 import json
 import os
 import platform
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -42,18 +46,51 @@ def _cpu_seconds() -> float:
     return r.ru_utime + r.ru_stime
 
 
+def _one_core_child(a) -> None:
+    """(Run in a child process bound to one core from its start, like a pinned worker.)  The warm-up design, then
+    the serial sweep timed; prints its wall time as JSON."""
+    base, analyses, grid = _setup(a)
+    run_sweep(base, {"alpha_f": [0.2], "eta": [0.1]}, analyses=analyses, progress=False)
+    t0 = time.perf_counter()
+    run_sweep(base, grid, analyses=analyses, progress=False)
+    print(json.dumps({"serial_one_core_s": time.perf_counter() - t0}))
+
+
+def _serial_on_one_core(argv: list[str]) -> float | None:
+    """Wall time of the serial sweep in a fresh process bound to one core before it starts (so that XLA sizes
+    and places its threads as in a pinned worker; binding a running process instead leaves its thread pools
+    spinning on one core, 2.6x slower on the longer designs); None where binding is not available."""
+    if not hasattr(os, "sched_setaffinity"):
+        return None
+    core = min(os.sched_getaffinity(0))
+    out = subprocess.run([sys.executable, __file__, *argv, "--one-core-child"], capture_output=True, text=True,
+                         preexec_fn=lambda: os.sched_setaffinity(0, {core}), check=True)
+    return float(json.loads(out.stdout.strip().splitlines()[-1])["serial_one_core_s"])
+
+
+def _setup(a):
+    base = gfbjax.reference_system(Nx=a.nx, Nz=a.nz)
+    analyses = [Equilibria(0.05, 1.0), Cycles(*a.cycle_range, m=3, N=8, max_points=a.cycle_points, locate=False)]
+    grid = {"alpha_f": ALPHA_F[:2], "eta": ETA[:2]} if a.quick else {"alpha_f": ALPHA_F, "eta": ETA}
+    return base, analyses, grid
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--nx", type=int, default=16)
     ap.add_argument("--nz", type=int, default=2)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--cycle-points", type=int, default=10, help="points of each design's cycle branch (default 10)")
+    ap.add_argument("--cycle-range", type=float, nargs=2, default=(0.3, 0.45), metavar=("START", "END"),
+                    help="Omega_bar range of each design's cycle branch (default 0.3 0.45)")
     ap.add_argument("--no-maps", action="store_true", help="skip the vmapped-batch vs loop comparison")
     ap.add_argument("--quick", action="store_true", help="2 x 2 designs and no maps: checks that the script runs")
     ap.add_argument("--out", default=str(RESULTS / "sweep_dask.json"))
+    ap.add_argument("--one-core-child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
-    base = gfbjax.reference_system(Nx=a.nx, Nz=a.nz)
-    analyses = [Equilibria(0.05, 1.0), Cycles(0.3, 0.45, m=3, N=8, max_points=10, locate=False)]
-    grid = {"alpha_f": ALPHA_F[:2], "eta": ETA[:2]} if a.quick else {"alpha_f": ALPHA_F, "eta": ETA}
+    if a.one_core_child:
+        return _one_core_child(a)
+    base, analyses, grid = _setup(a)
     n = len(grid["alpha_f"]) * len(grid["eta"])
     rows: dict = {}
 
@@ -68,6 +105,12 @@ def main() -> None:
         # cores the serial run kept busy (XLA:CPU spreads one design's kernels over its thread pool): with c busy
         # cores of w, w processes can be at most w / c times faster
         rows["serial_busy_cores"] = (_cpu_seconds() - cpu0) / rows["serial_s"]
+        # the same serial sweep in a process bound to one core: what one pinned worker does, so w pinned workers
+        # can at best take serial_one_core_s / w
+        one_core = _serial_on_one_core([arg for arg in sys.argv[1:] if arg != "--one-core-child"])
+        if one_core is not None:
+            rows["serial_one_core_s"] = one_core
+            rows["bound_speedup"] = a.workers * rows["serial_s"] / one_core
 
         from distributed import Client
 
@@ -121,10 +164,14 @@ def main() -> None:
                               "agree_converged": bool(np.array_equal(batch.converged, loop.converged))}
 
     rows["machine"] = {"cpus": os.cpu_count(), "platform": platform.platform(), "load_1min": os.getloadavg()[0],
-                       "grid": [a.nx, a.nz], "workers": a.workers}
+                       "grid": [a.nx, a.nz], "workers": a.workers,
+                       "cycle_points": a.cycle_points, "cycle_range": list(a.cycle_range)}
     print(f"{'run':<34} {'seconds':>9}")
     print(f"{'warm-up (1 design, compiles)':<34} {rows['warm_up_one_design_s']:>9.1f}")
     print(f"{f'serial, {n} designs':<34} {rows['serial_s']:>9.1f}   busy cores {rows['serial_busy_cores']:.2f}")
+    if "serial_one_core_s" in rows:
+        print(f"{'serial, bound to one core':<34} {rows['serial_one_core_s']:>9.1f}   bound for "
+              f"{a.workers} pinned workers {rows['bound_speedup']:.2f}x")
     print(f"{f'Dask cluster start ({a.workers} processes)':<34} {rows['cluster_start_s']:>9.1f}")
     print(f"{f'Dask, {n} designs on {a.workers} workers':<34} {rows['dask_s']:>9.1f}   speed-up {rows['speedup']:.2f}x")
     print(f"{'  again, workers warm':<34} {rows['dask_warm_s']:>9.1f}   speed-up "

@@ -16,7 +16,6 @@ import time
 from pathlib import Path
 
 import gfbjax
-import numpy as np
 
 from gfbjax import cont
 from gfbjax.analyses.cycles import (continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings,

@@ -224,15 +224,18 @@ STATES = Range("states", 1, MAX_DENSE_UNKNOWNS, integer=True,
                what="dense n x n Jacobians; n = (Nx - 1)(Nz + 1) + rotor states")
 
 
-def n_states(Nx: int, Nz: int, n_rotor: int) -> int:
-    """States of the foil-bearing system: (Nx - 1) Nz pressures, Nx - 1 foil strips and the rotor."""
-    return (Nx - 1) * (Nz + 1) + n_rotor
+def n_states(Nx: int, Nz: int, n_rotor: int, full_length: bool = False) -> int:
+    """States of the foil-bearing system: (Nx - 1) Nz pressures (``full_length``: (Nx - 1)(2 Nz - 1), the whole
+    bearing length at the same spacing), Nx - 1 foil strips and the rotor."""
+    nz = 2 * Nz - 1 if full_length else Nz
+    return (Nx - 1) * (nz + 1) + n_rotor
 
 
-def check_grid(Nx: Any, Nz: Any, n_rotor: int) -> tuple[int, int]:
-    """Check the foil-bearing grid (each axis and the number of states); returns ``(Nx, Nz)`` as ints."""
+def check_grid(Nx: Any, Nz: Any, n_rotor: int, full_length: bool = False) -> tuple[int, int]:
+    """Check the foil-bearing grid (each axis and the number of states, :func:`n_states`); returns ``(Nx, Nz)`` as
+    ints."""
     nx, nz = NX.check(Nx), NZ.check(Nz)
-    n = n_states(nx, nz, n_rotor)
+    n = n_states(nx, nz, n_rotor, full_length)
     if not STATES.contains(n):
         raise ParameterError(f"grid Nx x Nz = {nx} x {nz} has {n} states, outside the allowed range "
                              f"[1, {MAX_DENSE_UNKNOWNS}] (dense n x n Jacobians: {8 * n * n / 2**30:.3g} GiB each at "

@@ -26,6 +26,15 @@ Three of these readings of the paper are switches of :class:`SystemSpec`, record
   ``(m_d + 2 m_j) / m_d``);
 * ``omega_r_unit``: the unit of ``omega_r`` in ``e_u = G / omega_r``: ``"rad/s"`` or ``"rpm"`` (the paper's worked
   example of Eq. 16: G6.3 at 2500 rpm gives 24.1 um).
+
+Three more switches are model options where the paper's Sect. 2.1 can be built more than one way; they are not
+part of the presets, and their defaults are the model that every result of the project was computed with:
+
+* ``gumbel``: ``"forces"`` (the Gumbel ``max(p - 1, 0)`` in the bearing force and the foil drive) or ``"pressure"``
+  (the film pressure itself kept at or above ambient, :func:`gfbjax.model.reynolds.ambient_clipped_rates`);
+* ``foil_springs``: ``"all"`` (a spring under each of the ``Nx - 1`` strips) or ``"no_first"`` / ``"no_last"``
+  (``Nx - 2`` springs as the text counts them, the strip next to the fixed end held at the housing);
+* ``axial_domain``: ``"half"`` (half length, mid-plane symmetry) or ``"full"`` (whole length, ambient at both edges).
 """
 
 from __future__ import annotations
@@ -49,6 +58,7 @@ from .limits import ParameterError
 __all__ = [
     "SystemSpec",
     "Params",
+    "check_params",
     "ParameterError",
     "reference_system",
     "variation",
@@ -62,6 +72,9 @@ __all__ = [
     "UNBALANCE_MASS",
     "OMEGA_R_UNITS",
     "PRESETS",
+    "GUMBEL",
+    "FOIL_SPRINGS",
+    "AXIAL_DOMAINS",
 ]
 
 ROTORS = ("jeffcott", "rigid")
@@ -71,6 +84,12 @@ FOIL_DAMPING = ("structural", "paper")
 UNBALANCE_MASS = ("disc", "rotor")
 #: Units of ``omega_r`` in ``e_u = G / omega_r`` (Eq. 16).
 OMEGA_R_UNITS = ("rad/s", "rpm")
+#: Where the Gumbel condition acts: bearing force and foil drive only, or the film pressure itself (Sect. 2.1).
+GUMBEL = ("forces", "pressure")
+#: Foil springs: one under every strip, or ``Nx - 2`` with the first / last strip from the fixed end held (Sect. 2.1).
+FOIL_SPRINGS = ("all", "no_first", "no_last")
+#: Axial extent of the film grid: half length with the mid-plane symmetry condition (Eq. 5), or the whole length.
+AXIAL_DOMAINS = ("half", "full")
 #: Named sets of the three convention switches: the project's corrected reading (the defaults) and the paper's
 #: literal one.  ``SystemSpec.with_preset(name)`` applies one.
 PRESETS: dict[str, dict[str, str]] = {
@@ -169,6 +188,16 @@ class SystemSpec:
             (the paper's text: the unbalance ``u = (m_d + 2 m_j) e_u`` of the whole rotor sits on the disc, so the
             disc's forcing is ``(m_d + 2 m_j) / m_d`` times larger; the rigid rotor has no disc and is unaffected).
         omega_r_unit: unit of ``omega_r``: ``"rad/s"`` (default) or ``"rpm"`` (the paper's worked example).
+        gumbel: where the Gumbel condition acts (Sect. 2.1): ``"forces"`` (default: ``max(p - 1, 0)`` in the bearing
+            force and the foil drive; the film itself may go below ambient) or ``"pressure"`` (the film pressure is
+            kept at or above ambient inside the Reynolds equation: steady films satisfy ``p >= 1`` with the
+            complementarity of :func:`gfbjax.model.reynolds.ambient_clipped_rates`).
+        foil_springs: ``"all"`` (default: one spring under each of the ``Nx - 1`` strips, Eq. 10) or
+            ``"no_first"`` / ``"no_last"`` (``Nx - 2`` springs, the count of Sect. 2.1's text: the first strip after
+            the fixed end theta0, in the direction of rotation, or the last one before theta0 + 2 pi, is held at
+            ``q = 0``).
+        axial_domain: ``"half"`` (default: edge to mid-plane with ``dp/dz = 0`` there, Eq. 5) or ``"full"`` (the whole
+            length at the same spacing, ``2 Nz`` intervals, ambient at both edges; about twice the pressure states).
 
     :data:`PRESETS` names two sets of the last three fields: ``"corrected"`` (the defaults) and ``"paper"``;
     :meth:`with_preset` applies one, :attr:`preset` says which one a spec follows.
@@ -200,6 +229,9 @@ class SystemSpec:
     foil_damping: str = "structural"
     unbalance_mass: str = "disc"
     omega_r_unit: str = "rad/s"
+    gumbel: str = "forces"
+    foil_springs: str = "all"
+    axial_domain: str = "half"
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # NumPy / 0-d JAX numbers -> Python numbers (JSON, static jit fields)
@@ -229,6 +261,9 @@ class SystemSpec:
         _check_choice("foil_damping", self.foil_damping, FOIL_DAMPING)
         _check_choice("unbalance_mass", self.unbalance_mass, UNBALANCE_MASS)
         _check_choice("omega_r_unit", self.omega_r_unit, OMEGA_R_UNITS)
+        _check_choice("gumbel", self.gumbel, GUMBEL)
+        _check_choice("foil_springs", self.foil_springs, FOIL_SPRINGS)
+        _check_choice("axial_domain", self.axial_domain, AXIAL_DOMAINS)
         if self.e_u is None:
             limits.BALANCE_GRADE.check(self.G)
             limits.OMEGA_R.check(self.omega_r)
@@ -241,7 +276,7 @@ class SystemSpec:
                           "journals may then touch the foil)", UserWarning, stacklevel=4)
         limits.THETA0.check(self.theta0)
         limits.LOAD.check(self.load)
-        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
+        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor), self.axial_domain == "full")
         limits.GUMBEL_WIDTH.check(self.gumbel_width)
 
     # -- derived scales -----------------------------------------------------------------------------------
@@ -328,6 +363,9 @@ class SystemSpec:
             rotor=self.rotor,
             gumbel_width=self.gumbel_width,
             structural_damping=f(1.0 if self.foil_damping == "structural" else 0.0),
+            gumbel=self.gumbel,
+            foil_springs=self.foil_springs,
+            axial_domain=self.axial_domain,
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -367,8 +405,9 @@ class Params(eqx.Module):
     ``theta0`` foil fixed end [rad]; ``structural_damping`` the foil damping convention (``SystemSpec.foil_damping``)
     as a number, so that switching it does not recompile: 1 for ``c_f = eta k_f / Omega_bar`` ("structural"), 0 for
     ``c_f = eta k_f`` ("paper"), values between blending the two as ``c_f = eta k_f / (s Omega_bar + 1 - s)``.
-    Static fields (part of the tree structure; changing them recompiles): grid ``Nx``, ``Nz``, ``rotor`` kind
-    and ``gumbel_width``.  ``SystemSpec.nondim`` stores the floats
+    Static fields (part of the tree structure; changing them recompiles): grid ``Nx``, ``Nz``, ``rotor`` kind,
+    ``gumbel_width`` and the model options ``gumbel``, ``foil_springs``, ``axial_domain`` (as in
+    :class:`SystemSpec`).  ``SystemSpec.nondim`` stores the floats
     as 0-d float64 arrays so that ``equinox.filter_jit`` traces them (no recompilation when a value changes).
     """
 
@@ -387,6 +426,9 @@ class Params(eqx.Module):
     rotor: str = eqx.field(static=True, default="jeffcott")
     gumbel_width: float = eqx.field(static=True, default=0.0)
     structural_damping: Any = 1.0
+    gumbel: str = eqx.field(static=True, default="forces")
+    foil_springs: str = eqx.field(static=True, default="all")
+    axial_domain: str = eqx.field(static=True, default="half")
 
     def traced(self) -> "Params":
         """These parameters with every float leaf a 0-d float64 JAX array: ``equinox.filter_jit`` treats Python
@@ -398,10 +440,11 @@ class Params(eqx.Module):
         """Check the physical fields of concrete parameters against :mod:`gfbjax.limits` and return ``self``.
 
         ``kappa``, ``zeta`` > 0; ``sigma``, ``w_ext`` >= 0; ``alpha_f`` in (0, 100], ``eta`` in (0, 100] (as in
-        :class:`SystemSpec`); ``eps`` >= 0; ``structural_damping`` in [0, 1]; ``theta0`` in [-2 pi, 2 pi]; for the Jeffcott rotor ``k_s`` and
-        ``mass_ratio`` > 0; the grid as in :class:`SystemSpec`.  The analyses that take Params call it at their
-        entry, so that hand-made Params (``eqx.tree_at``) are checked as a SystemSpec is.  Leaves that are JAX
-        tracers (inside ``jit``/``vmap``/``grad``) are skipped; array leaves are checked element by element.
+        :class:`SystemSpec`); ``eps`` >= 0; ``structural_damping`` in [0, 1]; ``theta0`` in [-2 pi, 2 pi]; for the
+        Jeffcott rotor ``k_s`` and ``mass_ratio`` > 0; the grid and the model options as in :class:`SystemSpec`.  The
+        analyses that take Params call it at their entry, so that hand-made Params (``eqx.tree_at``) are checked as
+        a SystemSpec is.  Leaves that are JAX tracers (inside ``jit``/``vmap``/``grad``) are skipped; array leaves
+        are checked element by element.
         Not run on construction: zero tangents and filter specs are Params too.
         """
         if not isinstance(self.rotor, str) or self.rotor not in ROTORS:
@@ -414,7 +457,10 @@ class Params(eqx.Module):
                        ("mass_ratio", limits.MASS_RATIO)]
         for name, rng in fields:
             rng.check_all(getattr(self, name), f"Params.{name}")
-        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor))
+        _check_choice("gumbel", self.gumbel, GUMBEL)
+        _check_choice("foil_springs", self.foil_springs, FOIL_SPRINGS)
+        _check_choice("axial_domain", self.axial_domain, AXIAL_DOMAINS)
+        limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor), self.axial_domain == "full")
         limits.GUMBEL_WIDTH.check(self.gumbel_width)
         limits.STRUCTURAL_DAMPING.check_all(self.structural_damping, "Params.structural_damping")
         return self
@@ -445,19 +491,32 @@ VARIATIONS: dict[str, dict[str, Any]] = {
 }
 
 
-def validation_case(load_per_bearing: float = 10.0, preset: str | None = None, **overrides: Any) -> SystemSpec:
+def validation_case(load_per_bearing: float = 10.0, preset: str | None = None,
+                    mass_per_bearing: float | None = None, **overrides: Any) -> SystemSpec:
     """The paper's validation case (Table 1; Zhou et al. 2021): rigid rotor, balanced, on two GFBs.
 
-    ``k_f = 4.6417 GN/m^3`` gives ``alpha_f = p0 / (k_f c)``; the rotor mass per bearing is ``load / g``.
+    ``k_f = 4.6417 GN/m^3`` gives ``alpha_f = p0 / (k_f c)``; the rotor mass per bearing is ``load / g`` unless
+    ``mass_per_bearing`` is given.
 
     Args:
         load_per_bearing: static load per bearing [N] (10 N in the text, 15 N in Table 1).
         preset: convention preset applied before ``overrides`` (:data:`PRESETS`); None keeps the defaults.
+        mass_per_bearing: rotor mass per bearing [kg], > 0.  None (default): ``load_per_bearing / g``, the load
+            being the rotor's weight.  Given: a rotor of this mass carrying the static load ``load_per_bearing`` as
+            an external force (``g = 0``, ``load = load_per_bearing``).  The model sees only the sum of weight and
+            external load, so this is also a rotor of that mass under its own weight plus the external force
+            ``load_per_bearing - m g``.  The paper's Table 1 gives no rotor mass.
+
+    Raises:
+        ParameterError: a value out of range (naming it) or an unknown field in ``overrides``.
     """
     limits.LOAD_PER_BEARING.check(load_per_bearing)
     p0, c, g = 1.01325e5, 31.8e-6, 9.81
     spec = dict(R=19.05e-3, L=38.1e-3, c=c, mu=1.95e-5, p0=p0, g=g, m_j=load_per_bearing / g, m_d=1.0,
                 alpha_f=p0 / (4.6417e9 * c), eta=0.25, G=0.0, rotor="rigid")
+    if mass_per_bearing is not None:
+        m = limits.M_J.check(mass_per_bearing, "mass_per_bearing")
+        spec.update(m_j=m, g=0.0, load=load_per_bearing)
     if preset is not None:
         spec.update(_check_preset(preset))
     unknown = set(overrides) - _FIELDS
@@ -512,3 +571,14 @@ def system_from_name_or_file(name: str) -> SystemSpec:
     if name.endswith(".toml"):
         return load_config(name)
     return variation(name)
+
+
+def check_params(params: Any, name: str = "params") -> Params:
+    """``params`` checked (:meth:`Params.check`) and returned; the entry check of every analysis that takes the
+    dimensionless parameters.  A :class:`SystemSpec` (SI) or anything else gets a ParameterError that says what
+    to pass instead, not an AttributeError from deep inside."""
+    if isinstance(params, SystemSpec):
+        raise ParameterError(f"{name} must be the dimensionless Params, got a SystemSpec (SI): pass spec.nondim()")
+    if not isinstance(params, Params):
+        raise ParameterError(f"{name} must be gfbjax Params (SystemSpec(...).nondim()), got {type(params).__name__}")
+    return params.check()

@@ -12,7 +12,7 @@ from gfbjax.cont import _collocation as col
 from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings
 from gfbjax.analyses.energy import branch_energy, cycle_energy, sign_changes
 from gfbjax.model import layout
-from gfbjax.model.reynolds import bearing_force, gauge, mean_gauge_pressure
+from gfbjax.model.reynolds import bearing_force
 
 
 def _cycle(params, omega, N=16):

@@ -7,7 +7,6 @@ intermittently, see gfbjax/design/maps.py.)
 """
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 import gfbjax

@@ -328,3 +328,21 @@ def test_design_checks(small_params):
         optimized_continuation(small_params, 0.4, 0.3)
     with pytest.raises(ParameterError, match="omega_start"):
         optimized_continuation(small_params, math.nan, 0.3)
+
+
+def test_a_system_spec_where_params_are_expected_is_a_clear_error():
+    """Handing the SI SystemSpec to an analysis that takes the dimensionless Params gives a ParameterError that
+    says to call nondim(), before any computation.  Before, an AttributeError ('SystemSpec' object has no attribute
+    'check') came from inside (review: energy_map_stepped, FoilDesign)."""
+    import gfbjax
+    from gfbjax.design.evaluate import FoilDesign
+    from gfbjax.design.maps import energy_map_stepped
+    from gfbjax.params import ParameterError
+
+    spec = gfbjax.reference_system(Nx=16, Nz=2)
+    with pytest.raises(ParameterError, match="nondim"):
+        energy_map_stepped(spec, 0.2, [0.1], [0.05])
+    with pytest.raises(ParameterError, match="nondim"):
+        FoilDesign(spec, 0.2)
+    with pytest.raises(ParameterError, match="Params"):
+        FoilDesign({"alpha_f": 0.1}, 0.2)

@@ -40,7 +40,9 @@ def serial():
 def cluster():
     import distributed
 
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc:
+    from gfbjax.sweep import local_cluster
+
+    with local_cluster(2) as lc:
         with distributed.Client(lc) as client:
             yield lc, client
 
@@ -228,26 +230,47 @@ def test_dask_cluster_by_address_equals_serial(cluster, serial, tmp_path):
     cache = client.run(lambda: __import__("jax").config.jax_compilation_cache_dir)
     assert all("xla_cpu_enable_concurrency_optimized_scheduler=false" in f for f in flags.values())
     assert all(c for c in cache.values())
+    # with a core per worker, each worker's threads (XLA's pool included) run on its own core
+    if hasattr(os, "sched_getaffinity") and len(os.sched_getaffinity(0)) >= 2:
+        cores = client.run(lambda: {tuple(sorted(os.sched_getaffinity(int(t))))
+                                    for t in os.listdir("/proc/self/task")})
+        assert all(len(c) == 1 and len(next(iter(c))) == 1 for c in cores.values()), cores
+        assert len({next(iter(c)) for c in cores.values()}) == 2, cores
 
 
 def test_killed_worker_loses_no_design(cluster, serial, tmp_path):
     """kill -9 the worker holding a design while it computes: Dask reruns it elsewhere, the sweep completes."""
+    import threading
+    import time
+
     _, client = cluster
     client.wait_for_workers(2, timeout=120)
     killed: dict = {}
     records = []
+    done = threading.Event()
 
-    def kill_once(rec):
-        records.append(rec)
-        if killed:
-            return
-        pids = client.run(os.getpid)
-        busy = {w: [k for k in keys if str(k).startswith("gfbjax-sweep-")] for w, keys in client.processing().items()}
-        victim = next(w for w, keys in busy.items() if keys)  # the other designs are a second long: one is running
-        killed.update(pid=pids[victim], designs={str(k).split("-")[2] for k in busy[victim]})
-        os.kill(pids[victim], signal.SIGKILL)
+    def kill_first_busy_worker():
+        # watched from a thread, not from the records: when a record reaches the client the other designs may
+        # all be finished already (the workers hold the cores, the client waits its turn)
+        while not done.is_set() and not killed:
+            busy = {w: [k for k in keys if str(k).startswith("gfbjax-sweep-")]
+                    for w, keys in client.processing().items()}
+            victim = next((w for w, keys in busy.items() if keys), None)
+            if victim is not None:
+                time.sleep(0.2)  # into the design
+                pid = client.run(os.getpid, workers=[victim])[victim]
+                killed.update(pid=pid, designs={str(k).split("-")[2] for k in busy[victim]})
+                os.kill(pid, signal.SIGKILL)
+            time.sleep(0.02)
 
-    ds = run_sweep(BASE, GRID, analyses=[EQ], client=client, out=tmp_path, progress=False, on_record=kill_once)
+    watcher = threading.Thread(target=kill_first_busy_worker, daemon=True)
+    watcher.start()
+    try:
+        ds = run_sweep(BASE, GRID, analyses=[EQ], client=client, out=tmp_path, progress=False,
+                       on_record=records.append)
+    finally:
+        done.set()
+        watcher.join(10)
     assert killed["designs"]
     assert list(ds.outcome.values.ravel()) == ["ok"] * 4 and len(records) == 4
     for rec in records:

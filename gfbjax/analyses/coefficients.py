@@ -82,7 +82,7 @@ import numpy as np
 from .. import limits
 from ..limits import NoSolutionError, ParameterError
 from ..model import Grid, bearing_force, core_rates, layout, plain_bearing_rates
-from ..params import Params, SystemSpec
+from ..params import Params, SystemSpec, check_params
 from .plain import plain_bearing_steady
 from .static import StaticResult, solve_equilibrium
 
@@ -284,7 +284,7 @@ def coefficients_at(params: Params, omega: float, nu: float | Sequence[float], *
         ParameterError: bad params, speed, load or whirl frequency (before any solve).
         NoSolutionError: no static equilibrium with an open film at this speed and load.
     """
-    params.check()
+    check_params(params)
     omega = limits.SPEED.check(omega, "omega")
     for v in np.atleast_1d(np.asarray(nu, dtype=float)):
         _NU.check(float(v))
@@ -316,7 +316,7 @@ def bearing_coefficients(params: Params, omegas: Sequence[float], whirl_ratio: f
         ParameterError: bad input, before any solve.  NoSolutionError: a speed without an open-film equilibrium
         (the message names it).
     """
-    params.check()
+    check_params(params)
     ratio = WHIRL_RATIO.check(whirl_ratio)
     om = np.atleast_1d(np.asarray(omegas, dtype=float))
     if om.ndim != 1 or om.size == 0:
@@ -523,7 +523,7 @@ def coefficient_hopf(params: Params, omega_lo: float, omega_hi: float, *, xtol: 
     """
     from scipy.optimize import brentq
 
-    params.check()
+    check_params(params)
     lo = limits.SPEED.check(omega_lo, "omega_lo")
     hi = limits.SPEED.check(omega_hi, "omega_hi")
     if not lo < hi:

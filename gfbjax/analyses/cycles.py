@@ -33,7 +33,7 @@ from ..model import core_rates, layout, vector_field
 from ..model.system import film
 from ..model.pattern import jacobian_sparsity
 from .. import limits
-from ..params import ParameterError, Params, SystemSpec
+from ..params import ParameterError, Params, SystemSpec, check_params
 from ..limits import NoSolutionError
 from .static import StaticResult, solve_equilibrium
 
@@ -228,7 +228,7 @@ def default_cycle_settings(**changes: Any) -> cont.CycleSettings:
 
 def _check_speed_range(params: Params, omega_start: float, omega_end: float) -> tuple[float, float]:
     """The checked speeds (Python floats); ParameterError for a bad Params or speed, before any work."""
-    params.check()
+    check_params(params)
     omega_start = limits.SPEED.check(omega_start, "omega_start")
     omega_end = limits.SPEED.check(omega_end, "omega_end")
     if omega_start == omega_end:
@@ -383,6 +383,11 @@ CONVENTIONS = {
     "foil_damping": "c_f = eta k_f / Omega_bar when params.structural_damping is 1 (spec.foil_damping "
                     "'structural'), eta k_f when 0 ('paper')",
     "rotor_states": "jeffcott: x_j, y_j, x_d, y_d and their d/dtau; rigid: x_j, y_j and their d/dtau",
+    "model_options": "params.gumbel 'forces': max(p - 1, 0) in the bearing force and foil drive, 'pressure': the "
+                     "film kept at or above ambient as well; params.foil_springs 'all': a spring under each of the "
+                     "Nx - 1 strips, 'no_first' / 'no_last': the first / last strip from theta0 held at q = 0; "
+                     "params.axial_domain 'half': pressures on the half length (edge to mid-plane, n_z = Nz), "
+                     "'full': on the whole length (n_z = 2 Nz - 1)",
 }
 
 _PROBLEMS = {

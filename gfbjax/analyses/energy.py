@@ -33,9 +33,9 @@ import numpy as np
 from jax import Array
 
 from .. import cont
-from ..model import layout
+from ..model import foil_drive, layout
 from ..model.foil import foil_damping_coefficient, foil_rates
-from ..model.reynolds import bearing_force, gauge, mean_gauge_pressure
+from ..model.reynolds import bearing_force
 from ..model.rotor import unbalance_force
 from ..params import Params
 
@@ -66,8 +66,7 @@ def power(s: Array, omega: Array, params: Params) -> Array:
     else:
         v_j, v_u, to_force = r[4:6], r[6:8], 2.0 * params.mass_ratio / params.zeta
     F_U = unbalance_force(omega, params.eps, u, v)
-    qdot = foil_rates(q, gauge(mean_gauge_pressure(P, grid), params.gumbel_width), omega, params.alpha_f,
-                      params.eta, params.structural_damping)
+    qdot = foil_rates(q, foil_drive(P, grid, params), omega, params.alpha_f, params.eta, params.structural_damping)
     c_f = foil_damping_coefficient(omega, params.alpha_f, params.eta, params.structural_damping)
     return jnp.stack([to_force * jnp.dot(F_U, v_u), -2.0 * jnp.dot(F_B, v_j),
                       2.0 * grid.dtheta * c_f * jnp.sum(qdot * qdot)])

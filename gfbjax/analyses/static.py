@@ -27,7 +27,7 @@ from .. import cont
 from ..cont import Outcome
 from ..model import balanced_vector_field, film, layout
 from .. import limits
-from ..params import Params, SystemSpec
+from ..params import Params, SystemSpec, check_params
 
 __all__ = ["StaticResult", "newton_solve", "solve_equilibrium", "load_displacement",
            "with_load"]
@@ -110,7 +110,7 @@ class StaticResult:
             rotation [deg].
         h_min: minimum film thickness over c.
         theta: circumferential nodes [rad], foil ends included.
-        z: axial nodes over L (edge 0 .. mid-plane 1/2).
+        z: axial nodes over L (edge 0 .. mid-plane 1/2; with ``axial_domain="full"`` edge to edge, 0 .. 1).
         pressure: p/p0 on all nodes, shape (len(theta), len(z)).
         foil: strip deflection q/c at the nodes (0 at the clamped ends).
         eigenvalues: eigenvalues of the Jacobian (per unit tau), sorted by decreasing real part.
@@ -183,7 +183,7 @@ def _check_inputs(params: Params, omega: Any, w: Any, guess_w: Any = None) -> tu
     """Check the system (:meth:`Params.check`), the speed (:data:`gfbjax.limits.SPEED`) and the loads
     (:data:`gfbjax.limits.LOAD_W`) before any solve; returns the speed and loads as Python floats (NumPy and
     concrete JAX scalars are accepted)."""
-    params.check()
+    check_params(params)
     omega = limits.SPEED.check(omega, "omega")
     w = limits.LOAD_W.check(w, "w")
     if guess_w is not None:
@@ -203,7 +203,7 @@ def _build_result(s: Array, omega: float, w: float, params: Params, outcome: str
     h = np.asarray(film(s, params))
     pressure = np.asarray(grid.full_field(lay.pressures(s)))
     foil = np.pad(np.asarray(lay.foil_deflection(s)), 1)
-    z = np.concatenate([[0.0], np.asarray(grid.z())])
+    z = np.asarray(grid.z_nodes())
     attitude = math.degrees(math.atan2(yj, xj) + math.pi / 2)
     attitude = (attitude + 180.0) % 360.0 - 180.0
     return StaticResult(

@@ -56,7 +56,7 @@ from jax import Array
 from ..cont import Coloring, Outcome, color_pattern, dense_jacobian
 from ..model import film, layout, runup_vector_field
 from .. import limits
-from ..params import ParameterError, Params
+from ..params import ParameterError, Params, check_params
 
 __all__ = [
     "SOLVERS",
@@ -313,11 +313,12 @@ def runup_acceleration(omega_start: float, omega_end: float, revolutions: float)
 
 
 @functools.lru_cache(maxsize=16)
-def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float) -> Coloring:
+def _coloring_cached(Nx: int, Nz: int, rotor: str, gumbel_width: float, axial_domain: str = "half") -> Coloring:
     from ..model.pattern import jacobian_sparsity
     from ..params import reference_system
 
-    params = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width).nondim()
+    params = reference_system(Nx=Nx, Nz=Nz, rotor=rotor, gumbel_width=gumbel_width,
+                              axial_domain=axial_domain).nondim()
     return color_pattern(jacobian_sparsity(params, oscillator=False))
 
 
@@ -328,7 +329,7 @@ def jacobian_coloring(params: Params) -> Coloring:
     ``J`` plus the diagonal.  ``J`` is sparse except for the rows of the journal accelerations (the bearing force
     integrates every pressure): those dense rows are taken by reverse mode (one VJP each), the rest by one
     forward-mode JVP per colour.  Reference grid Nx=40, Nz=6 (281 states): 25 JVPs + 2 VJPs instead of 281 JVPs."""
-    return _coloring_cached(params.Nx, params.Nz, params.rotor, float(params.gumbel_width))
+    return _coloring_cached(params.Nx, params.Nz, params.rotor, float(params.gumbel_width), params.axial_domain)
 
 
 class ColoredChord(optx.AbstractRootFinder):
@@ -612,7 +613,7 @@ def check_simulate(params: Params, omega: Any, *, revolutions: Any = None, tau_e
     :data:`~gfbjax.limits.MAX_HISTORY_BYTES`.
     """
     settings = settings or TransientSettings()
-    params.check()
+    check_params(params)
     omega = limits.SPEED.check(omega, "omega")
     period = 2 * math.pi / omega
     if tau_end is None:
@@ -637,7 +638,7 @@ def check_run_up(params: Params, omega_start: Any, omega_end: Any, *, accel: Any
     :data:`~gfbjax.limits.MAX_HISTORY_BYTES`.
     """
     settings = settings or TransientSettings()
-    params.check()
+    check_params(params)
     w0 = limits.SPEED.check(omega_start, "omega_start")
     w1 = limits.SPEED.check(omega_end, "omega_end")
     if w0 == w1:

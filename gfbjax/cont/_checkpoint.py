@@ -18,7 +18,8 @@ Folder layout (plain numpy + JSON)::
 A step file holds ``rows`` (JSON: the scalar fields of each new :class:`~._branch.PointRecord`) with their arrays
 ``row<i>_<field>`` and ``row<i>_state_<key>``, ``special`` (JSON: the new :class:`~._results.SpecialPoint` records)
 with their states ``special<i>_<key>``, and the driver state: ``X_<key>``, ``Xprev_<key>`` (absent on the first
-step), ``tau_<key>``, ``tests`` (JSON) and ``ds``.
+step), ``tau_<key>``, ``tests`` (JSON), ``ds`` and ``driver`` (JSON: the event-refinement counters, so that a
+resumed branch refines exactly as an uninterrupted one).
 
 Resuming: opening a folder that holds steps with the same identity continues after the last step; one that
 ended (``end.json``, any outcome but ``interrupted`` or ``stopped``) returns the stored branch without computing.
@@ -28,7 +29,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,7 @@ class Restored:
     ds: float
     outcome: Outcome | None = None  # set when the branch had ended (end.json)
     message: str = ""
+    driver: dict[str, float] = field(default_factory=dict)  # the driver's counters (event refinement)
 
 
 def _plain(value: Any) -> Any:
@@ -167,15 +169,15 @@ class Checkpoint:
             last = data
         self._next, self._rows, self._special = len(steps), len(points), len(special)
         X_prev = _group(last, "Xprev_") or None
-        tests = json.loads(str(last["tests"]))
+        driver = json.loads(str(last["driver"])) if "driver" in last else {}
         return Restored(points, special, states, _group(last, "X_"), X_prev, _group(last, "tau_"),
-                        None if tests is None else {k: float(v) for k, v in tests.items()}, float(last["ds"]))
+                        _decode_tests(json.loads(str(last["tests"]))), float(last["ds"]), driver=driver)
 
     # -- writing ----------------------------------------------------------------------------------------------
     def append(self, points: list[PointRecord], special: list[SpecialPoint],
                special_states: list[dict[str, np.ndarray]], X: dict[str, np.ndarray],
                X_prev: dict[str, np.ndarray] | None, tau: dict[str, np.ndarray], tests: dict[str, float] | None,
-               ds: float) -> None:
+               ds: float, driver: dict[str, float] | None = None) -> None:
         """Write one step: the rows and special points added since the last call, and the driver state."""
         arrays: dict[str, np.ndarray] = {}
         rows = []
@@ -193,8 +195,9 @@ class Checkpoint:
         arrays.update({f"tau_{k}": np.asarray(v) for k, v in tau.items()})
         arrays["rows"] = np.array(json.dumps(rows))
         arrays["special"] = np.array(json.dumps(sps))
-        arrays["tests"] = np.array(json.dumps(None if tests is None else {k: float(v) for k, v in tests.items()}))
+        arrays["tests"] = np.array(json.dumps(_encode_tests(tests)))
         arrays["ds"] = np.array(float(ds))
+        arrays["driver"] = np.array(json.dumps({k: float(v) for k, v in (driver or {}).items()}))
         path = self.folder / f"step_{self._next:05d}.npz"
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as fh:
@@ -264,3 +267,20 @@ def _write_atomic(path: Path, data: bytes) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(data)
     os.replace(tmp, path)
+
+
+def _encode_tests(tests: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The driver's test data as JSON: numbers as floats, arrays (the members of the spectrum nearest the
+    stability boundary) as lists of [real, imag]."""
+    if tests is None:
+        return None
+    return {k: (float(v) if np.ndim(v) == 0 else [[float(z.real), float(z.imag)] for z in np.asarray(v, complex)])
+            for k, v in tests.items()}
+
+
+def _decode_tests(data: dict[str, Any] | None) -> dict[str, Any] | None:
+    """Inverse of :func:`_encode_tests`."""
+    if data is None:
+        return None
+    return {k: (float(v) if not isinstance(v, list) else np.array([complex(r, i) for r, i in v], complex))
+            for k, v in data.items()}

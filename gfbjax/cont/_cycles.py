@@ -20,7 +20,8 @@ from . import _collocation as col
 from ._branch import Branch, PointRecord
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
-from ._events import classify, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS
+from ._events import (classify, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS, multiplier_crossings,
+                      name_crossings)
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
@@ -271,6 +272,16 @@ class CycleCurve(Curve):
 
     def events(self, prev, cur, kinds):
         return detect(prev, cur, kinds)
+
+    def crossings(self, before, after):
+        """Multipliers that crossed the unit circle between two points, by matching."""
+        return multiplier_crossings(before, after)
+
+    def crossing_kinds(self, an, count):
+        """The ``count`` non-trivial multipliers nearest the unit circle, named: a complex pair an NS (two
+        crossings), a real negative one a PD, a real positive one a BPC."""
+        return name_crossings(nontrivial(an["spectrum"], self.problem.n_trivial), count,
+                              lambda z: abs(abs(z) - 1.0), "NS", lambda z: "PD" if z.real < 0 else "BPC")
 
     def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)

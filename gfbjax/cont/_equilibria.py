@@ -35,7 +35,8 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
-from ._events import signed_min
+from ._events import (ON_BOUNDARY, critical, matched_crossings, name_crossings as _name_crossings, sign_changes,
+                      signed_min)
 from ._newton import NewtonSettings, solve as newton_solve
 from ._problem import EquilibriumProblem
 from ._settings import EquilibriumSettings
@@ -158,14 +159,26 @@ class EquilibriumCurve(Curve):
 
     def tests(self, an, tangent_lam):
         out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"],
-               "UNSTABLE": float(np.sum(np.real(an["spectrum"]) > 0.0))}
+               "UNSTABLE": float(np.sum(np.real(an["spectrum"]) > 0.0)),
+               "BOUNDARY": float(np.sum(np.abs(np.real(an["spectrum"])) <= ON_BOUNDARY
+                                        * np.maximum(1.0, np.abs(an["spectrum"])))),
+               "CRITICAL": critical(an["spectrum"], lambda z: np.abs(z.real))}
         if self.monitor is not None:
             out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
         return out
 
+    def crossing_kinds(self, an, count):
+        """The ``count`` eigenvalues nearest the imaginary axis, named: a complex pair a HOPF (two crossings),
+        a real one a BP."""
+        return _name_crossings(an["spectrum"], count, lambda z: abs(z.real), "HOPF", lambda z: "BP")
+
+    def crossings(self, before, after):
+        """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""
+        return matched_crossings(before, after, lambda z: z.real > 0.0,
+                                 lambda z: np.abs(z.real) / np.maximum(1.0, np.abs(z)))
+
     def events(self, prev, cur, kinds):
-        found = [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
-                 and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+        found = sign_changes(prev, cur, kinds)
         if "BP" in found and "FOLD" in found:  # a side branch turns at the branch point it leaves: one event
             found.remove("FOLD")
         return found

@@ -43,6 +43,9 @@ from . import _collocation as col
 from ._floquet import nontrivial
 
 IMAG_TOL = 1e-7  # relative imaginary part below which a multiplier is real
+#: distance from the stability boundary (relative) at which an eigenvalue or multiplier counts as on it: a point
+#: exactly on an event, where the unstable count cannot say on which side the crossing member is
+ON_BOUNDARY = 1e-13
 
 
 def _conjugate_closed(nt: np.ndarray) -> np.ndarray:
@@ -77,15 +80,23 @@ def signed_min(factors: np.ndarray) -> float:
 
 def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> dict[str, float]:
     """The continuous test functions LPC, PD, BPC and NS of one point (module docstring), and ``UNSTABLE``, the
-    number of non-trivial multipliers outside the unit circle (not a test function: the driver compares its change
-    over a step with the events found)."""
+    number of non-trivial multipliers outside the unit circle, ``BOUNDARY``, the number on it, and ``CRITICAL``,
+    the multipliers nearest the circle (not test functions: the driver compares the crossings over a step with
+    the events found)."""
     nt = _conjugate_closed(nontrivial(mu, n_trivial))
     pp = _pair_products(nt)
     return {"LPC": float(tangent_lam),
             "PD": signed_min((nt + 1.0) / (np.abs(nt) + 1.0)),
             "BPC": signed_min((1.0 - nt) / (np.abs(nt) + 1.0)),
             "NS": signed_min((1.0 - pp) / (np.abs(pp) + 1.0)),
-            "UNSTABLE": float(np.sum(np.abs(nt) > 1.0))}
+            "UNSTABLE": float(np.sum(np.abs(nt) > 1.0)),
+            "BOUNDARY": float(np.sum(np.abs(np.abs(nt) - 1.0) <= ON_BOUNDARY)),
+            "CRITICAL": critical(nt, lambda z: np.abs(np.abs(z) - 1.0))}
+
+
+def multiplier_crossings(before: np.ndarray, after: np.ndarray) -> int:
+    """:func:`matched_crossings` for multipliers (unstable: outside the unit circle)."""
+    return matched_crossings(before, after, lambda z: np.abs(z) > 1.0, lambda z: np.abs(np.abs(z) - 1.0))
 
 
 #: How many multipliers cross the unit circle at each event (for the driver's check that a step's sign changes
@@ -93,14 +104,83 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
 EVENT_WEIGHTS = {"LPC": 1, "PD": 1, "BPC": 1, "NS": 2}
 
 
+def side(value: float) -> int:
+    """The side of zero a test value lies on, zero counted with the positive side: a point that lands exactly on
+    an event (a test value of exactly 0.0, as on a parameter grid aligned with the event) then belongs to one
+    side, so the crossing is found once, in the step that reaches the zero or in the one that leaves it (with the
+    plain sign, 0 * anything is no change on either step and the event was lost)."""
+    return 1 if value >= 0.0 else -1
+
+
+def sign_changes(prev: dict[str, float], cur: dict[str, float], kinds: tuple[str, ...]) -> list[str]:
+    """The test functions among ``kinds`` that changed :func:`side` between two consecutive points (both finite)."""
+    return [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k]) and side(prev[k]) != side(cur[k])]
+
+
 def detect(prev: dict[str, float], cur: dict[str, float], kinds: tuple[str, ...]) -> list[str]:
     """The test functions among ``kinds`` whose sign changed between two consecutive points (a BPC change in the
     same step as an LPC one is the fold's own multiplier through +1: the fold only)."""
-    found = [k for k in kinds if np.isfinite(prev[k]) and np.isfinite(cur[k])
-             and np.sign(prev[k]) * np.sign(cur[k]) < 0]
+    found = sign_changes(prev, cur, kinds)
     if "BPC" in found and "LPC" in found:
         found.remove("BPC")
     return found
+
+
+#: how many eigenvalues (multipliers) nearest the stability boundary each point keeps for matching (test key
+#: "CRITICAL"): enough for every member that can cross within one step
+N_CRITICAL = 16
+
+
+def critical(values: np.ndarray, distance) -> np.ndarray:
+    """The :data:`N_CRITICAL` members of ``values`` nearest the stability boundary (``distance(values)``, an
+    array), as complex numbers, nearest first."""
+    z = np.asarray(values, complex)
+    return z[np.argsort(distance(z), kind="stable")[:N_CRITICAL]]
+
+
+def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance) -> int:
+    """Members of the spectrum that changed side between two points, followed by nearest neighbours.  A member
+    counts when it and its nearest neighbour at the other point are each other's nearest, nearer than half the
+    distance to any other candidate (a confident match), lie on different sides (``unstable(z)``, boolean array),
+    and neither lies on the boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a point exactly on an event, whose
+    crossing belongs to the step its test value's side gives).  Catches what the unstable count cannot: a pair
+    leaving the stable side while another enters in the same step (the count and every test function's sign are
+    then unchanged).  Members without a confident match are not counted: a wrong match would report a crossing
+    that did not happen."""
+    a, b = np.asarray(before, complex), np.asarray(after, complex)
+    if a.size == 0 or b.size == 0:
+        return 0
+    d = np.abs(a[:, None] - b[None, :])
+    ab, ba = np.argmin(d, axis=1), np.argmin(d, axis=0)
+    second_a = np.sort(d, axis=1)[:, 1] if b.size > 1 else np.full(a.size, np.inf)
+    second_b = np.sort(d, axis=0)[1, :] if a.size > 1 else np.full(b.size, np.inf)
+    ua, ub = unstable(a), unstable(b)
+    on_a, on_b = distance(a) <= ON_BOUNDARY, distance(b) <= ON_BOUNDARY
+    count = 0
+    for i, j in enumerate(ab):
+        confident = ba[j] == i and d[i, j] < 0.5 * min(second_a[i], second_b[j])
+        if confident and ua[i] != ub[j] and not (on_a[i] or on_b[j]):
+            count += 1
+    return count
+
+
+def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real) -> list[str]:
+    """Event names for the ``count`` members of ``spectrum`` nearest the stability boundary (``distance(z)``
+    from it): ``pair`` for a complex pair (counted twice), ``real(z)`` for a real value."""
+    z = np.asarray(spectrum, complex)
+    names, left = [], int(count)
+    for k in np.argsort([distance(v) for v in z], kind="stable"):
+        if left <= 0:
+            break
+        v = z[k]
+        if abs(v.imag) > IMAG_TOL * max(1.0, abs(v)):
+            if v.imag > 0:  # each pair once, by its upper member
+                names.append(pair)
+                left -= 2
+        else:
+            names.append(real(v))
+            left -= 1
+    return names
 
 
 def classify(kind: str, mu: np.ndarray, n_trivial: int) -> dict[str, Any] | None:

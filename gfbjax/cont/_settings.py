@@ -133,7 +133,8 @@ class CycleSettings(_StepSettings):
     when |dx| <= tol (1 + max|x|)), ``newton_max_iter``.
     ``algorithm``: :class:`PseudoArclength` (default) or :class:`Natural`.
     Events: ``detect`` any of ("LPC", "PD", "NS", "BPC"); ``locate`` drives each test function to zero (tolerance
-    ``locate_tol``) and inserts the located point in the branch.
+    ``locate_tol``, relative to the test values at the ends of the step when they are below 1) and inserts the
+    located point in the branch.
     ``floquet``: a Floquet method (None: PeriodicQR with the dense solver, Arnoldi(k=12) with the sparse one).
     ``linear_solver``: DenseCondensation(), SparseSweep(...) or None (sparse when the problem has a Jacobian
     pattern and n >= 80).  ``save_states``: keep every point's full orbit in the branch (restarts, energies).

@@ -32,7 +32,7 @@ from ..analyses.cycles import gfb_cycle_problem, unbalance_response_start
 from ..limits import NoSolutionError
 from ..analyses.energy import CycleEnergy, orbit_energy
 from .. import limits
-from ..params import ParameterError, Params
+from ..params import ParameterError, Params, check_params
 
 __all__ = ["FOIL_BOUNDS", "DESIGN_VARIABLES", "CycleEvaluation", "CycleNotConverged", "FoilDesign", "W_cb_of"]
 
@@ -112,14 +112,15 @@ class FoilDesign:
     :func:`gfbjax.analyses.cycles.unbalance_response_start`: the linear forced response at the given params, or a
     cycle reached by ramping the unbalance up when that response would close the film).  ``gradient_mode``: 'adjoint' (one transposed solve per objective, for
     every parameter at once) or 'tangent' (one solve per design variable); both work with either linear solver
-    and agree to rounding ('auto' = 'adjoint').  Counters: ``n_solves`` (cycle solves, failed ones included)
-    and ``n_gradients``.
+    and agree to rounding ('auto' = 'adjoint').  Counters: ``n_solves`` (cycle solves, failed ones included),
+    ``n_newton_steps`` (Newton steps of those solves, each converged solve's final residual check included) and
+    ``n_gradients``.
     """
 
     def __init__(self, params: Params, omega: float, *, m: int = 4, N: int = 16, linear_solver: cont.LinearSolver | None = None,
                  orbit: Orbit | None = None, newton_tol: float = 1e-9, newton_max_iter: int = 10,
                  gradient_mode: str = "auto"):
-        params.check()
+        check_params(params)
         omega = limits.SPEED.check(omega, "omega")
         if gradient_mode not in ("auto", "adjoint", "tangent"):
             raise ParameterError(f"gradient_mode = {gradient_mode!r} is not one of ('auto', 'adjoint', 'tangent')")
@@ -141,6 +142,7 @@ class FoilDesign:
                 raise CycleNotConverged(str(exc)) from None
         self.orbit = self._at_speed(orbit)
         self.n_solves = 0
+        self.n_newton_steps = 0
         self.n_gradients = 0
         self._memo: dict[str, Any] = {}  # Floquet warm starts from evaluation to evaluation
 
@@ -161,15 +163,22 @@ class FoilDesign:
                            (jnp.asarray(float(alpha_f)), jnp.asarray(float(eta))))
 
     def evaluate(self, alpha_f: float, eta: float, *, gradient: bool = False,
-                 guess: Orbit | None = None) -> CycleEvaluation:
+                 guess: Orbit | None = None, phase_reference: Orbit | None = None) -> CycleEvaluation:
         """Solve the cycle at (alpha_f, eta) from ``guess`` (default: the last cycle) and evaluate both
-        objectives; ``gradient=True`` adds their derivatives.  Raises :class:`CycleNotConverged`."""
+        objectives; ``gradient=True`` adds their derivatives.  ``phase_reference``: the orbit of the integral
+        phase condition (default: the start).  The discrete cycles form a one-parameter family of phase shifts
+        along which the works vary at the size of the discretisation error, so solves that must agree to rounding
+        from different starts (maps reached along different paths) need one common reference.
+        Raises :class:`CycleNotConverged`."""
         alpha_f, eta = check_foil(alpha_f, eta)
         p = self.params_at(alpha_f, eta)
         problem = gfb_cycle_problem(p)
         start = self.orbit if guess is None else self._at_speed(guess)
+        con = None if phase_reference is None else cont.natural_constraint(self._at_speed(phase_reference),
+                                                                           self.omega)
         self.n_solves += 1
-        sol, lin = cont.correct_cycle(problem, start, settings=self.settings)
+        sol, lin = cont.correct_cycle(problem, start, con, settings=self.settings)
+        self.n_newton_steps += int(sol.iterations) + int(sol.converged)
         if not sol.converged:
             raise CycleNotConverged(f"no cycle at alpha_f={alpha_f:.6g}, eta={eta:.6g}, Omega_bar={self.omega}: "
                                     f"Newton {sol.outcome} after {int(sol.iterations)} iterations")

@@ -9,6 +9,11 @@ strip mean gauge pressure; a sub-ambient film does not pull the foil.  Two dampi
 * ``"paper"`` (0): ``c_f = eta k_f``, Eq. (10) as printed.
 
     c_f q' + k_f q = max(p_m - 1, 0)   =>   q' = (alpha_f max(p_m - 1, 0) - q) / eta * (Omega_bar if structural)
+
+Spring count (``SystemSpec.foil_springs``): one spring under every strip (``"all"``, default: ``Nx - 1`` springs,
+as Eq. 10 counts them), or ``Nx - 2`` springs as the text of Sect. 2.1 counts them, the strip without one being
+held at the housing: the first strip after the fixed end theta0 in the direction of rotation (``"no_first"``) or
+the last one before theta0 + 2 pi (``"no_last"``); see :func:`supported_drive`.
 """
 
 from __future__ import annotations
@@ -17,11 +22,14 @@ from typing import Any
 
 from jax import Array
 
-__all__ = ["FOIL_DAMPING", "foil_rates", "foil_damping_coefficient", "static_foil_deflection"]
+__all__ = ["FOIL_DAMPING", "FOIL_SPRINGS", "foil_rates", "foil_damping_coefficient", "static_foil_deflection",
+           "supported_drive"]
 
 #: The foil damping conventions by name (same tuple as :data:`gfbjax.params.FOIL_DAMPING`) and their number.
 FOIL_DAMPING = ("structural", "paper")
 _STRUCTURAL = {"structural": 1.0, "paper": 0.0}
+#: The spring counts by name (same tuple as :data:`gfbjax.params.FOIL_SPRINGS`); see :func:`supported_drive`.
+FOIL_SPRINGS = ("all", "no_first", "no_last")
 
 
 def _speed_factor(omega: Array, structural: Any) -> Array:
@@ -53,3 +61,25 @@ def foil_rates(q: Array, drive: Array, omega: Array, alpha_f: Array, eta: Array,
 def static_foil_deflection(drive: Array, alpha_f: Array) -> Array:
     """Static strip deflection ``q = max(p_m - 1, 0) / k_f``."""
     return alpha_f * drive
+
+
+def supported_drive(drive: Array, foil_springs: str = "all") -> Array:
+    """The strip drive ``max(p_m - 1, 0)`` [p0] with the strip that has no spring unloaded (Sect. 2.1).
+
+    ``drive`` has one value per strip, shape (Nx - 1,), ordered from the fixed end theta0 in the direction of
+    rotation.  ``"all"`` returns it unchanged; ``"no_first"`` / ``"no_last"`` zero its first / last entry: that strip
+    then relaxes to ``q = 0`` and stays there, which is a strip held at the housing (its damper-only equation is
+    decoupled, so it adds the eigenvalue ``-Omega_bar / eta`` (structural) and moves no other).
+
+    Raises:
+        ParameterError: ``foil_springs`` is not one of :data:`FOIL_SPRINGS`.
+    """
+    if foil_springs == "all":
+        return drive
+    if foil_springs == "no_first":
+        return drive.at[0].set(0.0)
+    if foil_springs == "no_last":
+        return drive.at[-1].set(0.0)
+    from ..params import ParameterError
+
+    raise ParameterError(f"foil_springs = {foil_springs!r} is not one of {FOIL_SPRINGS}")

@@ -4,6 +4,13 @@ docs/model.md), film thickness (Eq. 3), bearing forces (Eq. 7) and strip mean pr
 All quantities are dimensionless: ``p = p/p0``, ``h = h/c``, time ``tau = t/t*``, speed ``Omega_bar`` (= the
 bearing number Lambda).  The discretisation is conservative and second order: Poiseuille fluxes on cell faces with
 the face coefficient ``p h^3`` averaged from the two nodes, and a central difference for the Couette term.
+
+Two model options of :class:`gfbjax.SystemSpec` act here (docs/model.md):
+
+* ``axial_domain``: the half length with a mid-plane symmetry condition (default) or the full length with ambient
+  pressure at both edges (:class:`Grid` ``full_length``);
+* ``gumbel``: the Gumbel condition on the bearing force and the foil drive only (``"forces"``, default) or on the
+  film pressure itself (``"pressure"``, :func:`ambient_clipped_rates`).
 """
 
 from __future__ import annotations
@@ -14,7 +21,16 @@ from jax import Array
 
 from .grid import Grid
 
-__all__ = ["gauge", "film_thickness", "pressure_rates", "bearing_force", "mean_gauge_pressure"]
+__all__ = ["gauge", "film_thickness", "pressure_rates", "ambient_clipped_rates", "bearing_force",
+           "mean_gauge_pressure", "GUMBEL", "AMBIENT_RELAXATION"]
+
+#: Where the Gumbel condition acts (:attr:`gfbjax.SystemSpec.gumbel`): on the bearing force and the foil drive only,
+#: or on the film pressure itself.
+GUMBEL = ("forces", "pressure")
+#: Rate [1/tau] at which ``gumbel="pressure"`` returns a node below ambient to ambient.  It is the eigenvalue
+#: (-rate) of every clipped node and moves no other eigenvalue (their Jacobian rows hold only the diagonal), so it
+#: does not change equilibria or their stability; 1 is of the order of the film's own rates at Omega_bar ~ 1.
+AMBIENT_RELAXATION = 1.0
 
 
 def gauge(x: Array, width: float = 0.0) -> Array:
@@ -31,13 +47,17 @@ def film_thickness(theta: Array, x: Array, y: Array, q: Array | float = 0.0) -> 
 
 
 def _pad(P: Array, h: Array, grid: Grid) -> tuple[Array, Array]:
-    """Pressure with boundary and mirror nodes: theta (ends p=1 or periodic), z (edge p=1, mid-plane mirror).
+    """Pressure with boundary and mirror nodes: theta (ends p=1 or periodic), z (edge p=1, mid-plane mirror; full
+    length: p=1 at both edges).
 
     ``h`` must already include the end nodes for the foil bearing (length Nx+1) or be periodic (length Nx).
-    Returns the padded pressure (n_theta+2, Nz+2) and film (n_theta+2,) with one neighbour on each side.
+    Returns the padded pressure (n_theta+2, n_z+2) and film (n_theta+2,) with one neighbour on each side.
     """
     ones = jnp.ones((P.shape[0], 1), P.dtype)
-    Pz = jnp.concatenate([ones, P, P[:, -2:-1]], axis=1)  # edge j=0, unknowns 1..Nz, mirror of Nz-1
+    if grid.full_length:
+        Pz = jnp.concatenate([ones, P, ones], axis=1)
+    else:
+        Pz = jnp.concatenate([ones, P, P[:, -2:-1]], axis=1)  # edge j=0, unknowns 1..Nz, mirror of Nz-1
     if grid.periodic:
         Pp = jnp.concatenate([Pz[-1:], Pz, Pz[:1]], axis=0)
         hp = jnp.concatenate([h[-1:], h, h[:1]])
@@ -54,7 +74,7 @@ def pressure_rates(P: Array, h: Array, hdot: Array, omega: Array, kappa: Array, 
     ``p' = [ 1/2 d/dth(p h^3 dp/dth) + kappa^2/2 d/dz(p h^3 dp/dz) - Omega/2 d/dth(p h) ] / h - p h'/h``.
 
     Args:
-        P: pressures at the unknowns, shape (n_theta, Nz).
+        P: pressures at the unknowns, shape (n_theta, n_z) (``n_z = Nz``, or ``2 Nz - 1`` on the full length).
         h: film thickness at all circumferential nodes: (Nx+1,) for the foil bearing (ends included),
             (Nx,) for the periodic bearing.
         hdot: dh/dtau at the unknowns, shape (n_theta,).
@@ -81,6 +101,27 @@ def pressure_rates(P: Array, h: Array, hdot: Array, omega: Array, kappa: Array, 
     return (0.5 * div_t + 0.5 * kappa**2 * div_z - 0.5 * omega * conv) / hc - P * hdot[:, None] / hc
 
 
+def ambient_clipped_rates(Pdot: Array, P: Array, width: float = 0.0, rate: float = AMBIENT_RELAXATION) -> Array:
+    """The Gumbel condition applied to the film pressure itself (``SystemSpec.gumbel = "pressure"``; paper
+    Sect. 2.1: a pressure below ambient "should be considered equal to p0").
+
+    ``p' = Pdot`` above ambient (the Reynolds equation untouched, so transients and cycles above ambient are the
+    model's own), ``p' = max(Pdot, rate (1 - p))`` at or below it: a node at ambient whose Reynolds rate ``Pdot`` is
+    negative stays at ambient, a node below ambient returns to it at ``rate``.  Its equilibria are those of the Reynolds equation with the
+    complementarity ``p >= 1``, ``Pdot <= 0``, ``(p - 1) Pdot = 0`` (the Swift-Stieber condition that clipping the
+    pressure in an iterative Reynolds solver converges to), so a steady film never drops below ambient.
+
+    Args:
+        Pdot: Reynolds rates :func:`pressure_rates` at the unknowns, any shape.
+        P: pressures over p0 at the same unknowns.
+        width: smoothing of the ``max`` at or below ambient (:func:`gauge`); 0 = exact.
+        rate: relaxation rate [1/tau] below ambient, > 0 (:data:`AMBIENT_RELAXATION`).
+    """
+    floor = rate * (1.0 - P)
+    # above ambient the floor would cap how fast a pressure may fall (at rate (p - 1)): not part of the condition
+    return jnp.where(P > 1.0, Pdot, floor + gauge(Pdot - floor, width))
+
+
 def bearing_force(P: Array, theta: Array, grid: Grid, width: float = 0.0, gumbel: bool = True) -> Array:
     """Gas force on the journal over the whole bearing length, Eq. (7), in units of ``p0 R L``.
 
@@ -88,11 +129,11 @@ def bearing_force(P: Array, theta: Array, grid: Grid, width: float = 0.0, gumbel
     when ``gumbel`` is False, for the plain bearing).  Trapezoid rule; the half domain counts twice.
     """
     gp = gauge(P - 1.0, width) if gumbel else P - 1.0
-    col = 2.0 * gp @ grid.z_weights()  # integral over the full length, per circumferential node
+    col = grid.length_factor * gp @ grid.z_weights()  # integral over the full length, per circumferential node
     w = grid.dtheta * col
     return -jnp.stack([jnp.sum(w * jnp.cos(theta)), jnp.sum(w * jnp.sin(theta))])
 
 
 def mean_gauge_pressure(P: Array, grid: Grid) -> Array:
     """Strip mean gauge pressure ``p_m - 1`` over the bearing length, Eq. (9), trapezoid rule."""
-    return 2.0 * (P - 1.0) @ grid.z_weights()
+    return grid.length_factor * (P - 1.0) @ grid.z_weights()

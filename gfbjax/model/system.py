@@ -9,7 +9,9 @@ Forms (all jit-, vmap- and grad-safe; ``params`` is a :class:`gfbjax.params.Para
 * :func:`forced_vector_field` ``f(tau, s, omega, params)`` — Eq. (17) with Eq. (15a), for time integration.
 * :func:`runup_vector_field` ``f(tau, s, params, omega0, accel)`` — run-up at constant acceleration, Eq. (15b).
 
-States and their order are documented in :mod:`gfbjax.model.grid`; :func:`layout` gives named views.
+States and their order are documented in :mod:`gfbjax.model.grid`; :func:`layout` gives named views.  The model
+options of :class:`gfbjax.SystemSpec` (``gumbel``, ``foil_springs``, ``axial_domain``) reach it as static fields of
+``params`` and are applied by the module that owns each concept (:mod:`.reynolds`, :mod:`.foil`, :mod:`.grid`).
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ import jax.numpy as jnp
 from jax import Array
 
 from ..params import Params
-from .foil import foil_rates
+from .foil import foil_rates, supported_drive
 from .grid import Grid, StateLayout
-from .reynolds import bearing_force, film_thickness, gauge, mean_gauge_pressure, pressure_rates
+from .reynolds import (ambient_clipped_rates, bearing_force, film_thickness, gauge, mean_gauge_pressure,
+                       pressure_rates)
 from .rotor import N_ROTOR, oscillator_rates, rotor_rates, unbalance_force, unbalance_force_runup
 
 __all__ = [
@@ -28,6 +31,7 @@ __all__ = [
     "layout",
     "film",
     "core_rates",
+    "foil_drive",
     "vector_field",
     "balanced_vector_field",
     "forced_vector_field",
@@ -38,8 +42,8 @@ __all__ = [
 
 
 def grid_of(params: Params) -> Grid:
-    """The foil bearing's grid for these parameters."""
-    return Grid(params.Nx, params.Nz, periodic=False)
+    """The foil bearing's grid for these parameters (``params.axial_domain``: half or full length)."""
+    return Grid(params.Nx, params.Nz, periodic=False, full_length=params.axial_domain == "full")
 
 
 def layout(params: Params, oscillator: bool = False) -> StateLayout:
@@ -56,6 +60,12 @@ def film(s: Array, params: Params) -> Array:
     return film_thickness(grid.theta_nodes(params.theta0), xj, yj, q)
 
 
+def foil_drive(P: Array, grid: Grid, params: Params) -> Array:
+    """Load on each foil strip, ``max(p_m - 1, 0)`` [p0] (Eq. 9-10 with the Gumbel condition), shape (Nx - 1,),
+    zero on a strip without a spring (``params.foil_springs``, :func:`gfbjax.model.foil.supported_drive`)."""
+    return supported_drive(gauge(mean_gauge_pressure(P, grid), params.gumbel_width), params.foil_springs)
+
+
 def core_rates(s: Array, omega: Array, F_U: Array, params: Params) -> Array:
     """d/dtau of the N core states (pressures, foil strips, rotor), Eq. (17), for a given unbalance forcing."""
     lay = layout(params)
@@ -65,12 +75,14 @@ def core_rates(s: Array, omega: Array, F_U: Array, params: Params) -> Array:
     r = lay.rotor(s)
     theta = grid.theta(params.theta0)
     # foil first: its rate enters dh/dtau of the Reynolds equation
-    drive = gauge(mean_gauge_pressure(P, grid), params.gumbel_width)
+    drive = foil_drive(P, grid, params)
     qdot = foil_rates(q, drive, omega, params.alpha_f, params.eta, params.structural_damping)
     vx, vy = (r[2], r[3]) if params.rotor == "rigid" else (r[4], r[5])
     h = film_thickness(grid.theta_nodes(params.theta0), r[0], r[1], jnp.pad(q, 1))
     hdot = -vx * jnp.cos(theta) - vy * jnp.sin(theta) + qdot
     Pdot = pressure_rates(P, h, hdot, omega, params.kappa, grid)
+    if params.gumbel == "pressure":
+        Pdot = ambient_clipped_rates(Pdot, P, params.gumbel_width)
     F_B = bearing_force(P, theta, grid, params.gumbel_width, gumbel=True)
     rdot = rotor_rates(r, F_B, F_U, params)
     return jnp.concatenate([Pdot.reshape(-1), qdot, rdot])
@@ -108,7 +120,7 @@ def initial_state(params: Params, oscillator: bool = False) -> Array:
     (Eq. 6); oscillator on its cycle at phase 0."""
     lay = layout(params, oscillator)
     grid = lay.grid
-    P = jnp.ones((grid.n_theta, grid.Nz))
+    P = jnp.ones((grid.n_theta, grid.n_z))
     q = jnp.zeros(grid.n_theta)
     r = jnp.zeros(lay.n_rotor)
     if params.rotor == "jeffcott":

@@ -109,13 +109,14 @@ def _need_unbalance(name: str, specs: Sequence[SystemSpec], labels: Sequence[str
 
 
 def _check_cycle_size(name: str, specs: Sequence[SystemSpec], m: int, N: int) -> None:
-    """The engine's memory and Floquet checks, once per grid (the only part of a spec they depend on)."""
+    """The engine's memory and Floquet checks, once per state layout (grid, rotor model and axial domain: the only
+    parts of a spec they depend on)."""
     from .. import cont
     from ..analyses.cycles import gfb_cycle_problem
 
     done = set()
     for spec in specs:
-        key = (spec.Nx, spec.Nz, spec.rotor)
+        key = (spec.Nx, spec.Nz, spec.rotor, spec.axial_domain)
         if key in done:
             continue
         done.add(key)

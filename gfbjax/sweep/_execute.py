@@ -93,14 +93,27 @@ def run_serial(tasks: Sequence[Task], analyses: Sequence[Any], on_record: OnReco
         on_record(compute_design(key, fields, changes, analyses, compilation_cache))
 
 
-def local_cluster(n_workers: int | None = None) -> Any:
+def local_cluster(n_workers: int | None = None, pin: bool | None = None) -> Any:
     """A ``distributed.LocalCluster`` of ``n_workers`` single-threaded worker processes (default: one per CPU
     core).  One thread per process: XLA:CPU already spreads one design's kernels over the cores, and JAX's
-    compiled kernels and the jit caches are per process anyway.  No dashboard (no port to collide with)."""
+    compiled kernels and the jit caches are per process anyway.  No dashboard (no port to collide with).
+
+    ``pin`` (default: with 2 workers or more, and no more workers than cores) binds worker ``i`` to core ``i`` (see
+    :class:`gfbjax.sweep._pinning.PinToCore`).  The workers' statistical profiler is off."""
+    import dask
     from distributed import LocalCluster
 
+    from ._pinning import PinToCore
+
     n = n_workers or os.cpu_count() or 1
-    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    # one worker keeps every core (XLA spreads its kernels over them); more than one core each: nothing to bind
+    plugins = {PinToCore()} if (pin if pin is not None else 2 <= n <= cores) else set()
+    # Dask's statistical profiler samples every worker thread's stack every 10 ms; on JAX's deep stacks that cost
+    # 7-13 % of each design (the 16-design sweep of benchmarks/sweep_dask.py) for a profile nobody reads here
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                            plugins=plugins)
 
 
 def run_dask(tasks: Sequence[Task], analyses: Sequence[Any], on_record: OnRecord, client: Any,

@@ -130,3 +130,22 @@ def test_folder_of_an_older_format_is_refused_with_its_reason(tmp_path):
     journal.write_text(json.dumps(head))
     with pytest.raises(CheckpointError, match="format version 1"):
         continue_equilibria(prob, EQ, np.zeros(4), 0.0, checkpoint=tmp_path)
+
+
+@pytest.mark.parametrize("k", range(3, 9))
+def test_resume_keeps_the_event_refinement_count(tmp_path, k):
+    """With event_refine = 1 the refinement budget spans several steps (the count runs until the event is passed);
+    a branch interrupted in between must resume with the same count.  Before, the count restarted at 0 after a
+    resume, and the resumed branch found two Hopf points that the uninterrupted one did not (review of this
+    issue): here every interruption point gives the uninterrupted branch."""
+    import sys
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_cont_events import opposite_hopf_pairs
+
+    prob = EquilibriumProblem(opposite_hopf_pairs, 4, jnp.asarray(0.03))
+    st = EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5, event_refine=1)
+    whole = continue_equilibria(prob, st, np.zeros(4), 0.05)
+    first = continue_equilibria(prob, st, np.zeros(4), 0.05, checkpoint=tmp_path / "ck", callback=_interrupt_at(k))
+    assert first.outcome is Outcome.INTERRUPTED
+    resumed = continue_equilibria(prob, st, np.zeros(4), 0.05, checkpoint=tmp_path / "ck")
+    _same(resumed, whole, 1e-12)

@@ -208,12 +208,14 @@ def test_cycle_branch_starts_at_a_fold(direction):
     assert np.all(br.stable[away] == (sides[0] > 0))
 
 
-def test_start_without_a_solution_nearby_fails_instead_of_moving():
+@pytest.mark.parametrize("ds, ds_max, dlam_max", [(0.05, 0.1, np.inf), (10.0, 20.0, 0.05)])
+def test_start_without_a_solution_nearby_fails_instead_of_moving(ds, ds_max, dlam_max):
     """Asked to start at lam = -1.5, where the radial equation has no cycle and no fold is near (the fold is at -1),
     the start fails; before, the correction along the null tangent ran off to lam = -0.28 and the branch was
-    returned as if it started there."""
+    returned as if it started there.  Also with a large arclength step and a small dlam_max (as on the GFB, whose
+    arclength holds the period): the move of 1.2 in lam was compared with ds = 10 and let through."""
     from gfbjax.cont import Outcome, start_from_function
-    st = CycleSettings(m=4, N=20, ds=0.05, ds_max=0.1, max_points=8)
+    st = CycleSettings(m=4, N=20, ds=ds, ds_max=ds_max, dlam_max=dlam_max, max_points=8)
     prob = CycleProblem(bautin_radial, 2, jnp.asarray(1.0))
     start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
                                 2 * np.pi, -1.5, st)

@@ -223,6 +223,135 @@ def test_two_hopf_points_in_one_step_are_both_found():
     np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-9)
 
 
+def test_hopf_points_closer_than_the_shortest_step_are_reported_unlocated():
+    """A double Hopf point (gap 1e-9, far below ds / 2^event_refine): no step can separate the two crossings, and
+    the Hopf test function changes sign twice in every one of them.  After the last halving the four eigenvalues
+    that crossed are reported as two HOPF points, not located, at the point after the step.  Before, nothing was
+    reported and only the stability flag flipped."""
+    br = continue_equilibria(EquilibriumProblem(close_hopf_pairs, 4, jnp.asarray(1e-9)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5), np.zeros(4), 0.05)
+    hs = br.special_of("HOPF")
+    assert len(hs) == 2 and not any(h.located for h in hs), br.special
+    assert all(1.0 < h.lam < 1.0 + 0.2 for h in hs)
+    assert sorted(round(h.omega, 6) for h in hs) in ([1.0, 1.0], [1.0, 1.7], [1.7, 1.7])
+    i = int(np.argmax(br.lam > 1.0 + 1e-9))
+    assert br.stable[i - 1] and not br.stable[i]
+
+
+def test_points_landing_exactly_on_hopf_points_report_each_once():
+    """Steps of exactly 0.25 along x = 0 from lam = 0 land on lam = 1.0 and 1.5, where the Hopf test function is
+    exactly 0.0.  Each Hopf point is reported once, located, with its frequency.  Before, a test value of 0.0 on
+    one side of both steps around it was no sign change in either, and both were missed."""
+    br = continue_equilibria(EquilibriumProblem(close_hopf_pairs, 4, jnp.asarray(0.5)),
+                             EquilibriumSettings(ds=0.25, ds_max=0.25, lam_max=2.0), np.zeros(4), 0.0)
+    assert np.any(br.lam == 1.0) and np.any(br.lam == 1.5)  # the grid is aligned as intended
+    hs = br.special_of("HOPF")
+    assert [round(h.lam, 12) for h in hs] == [1.0, 1.5], br.special
+    assert all(h.located for h in hs)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-12)
+
+
+def opposite_hopf_pairs(x, lam, gap):
+    """A pair leaving the right half plane at lam = 1, (1 - lam) +- i, and one entering it at lam = 1 + gap,
+    (lam - 1 - gap) +- 1.7 i (Hopf normal forms, the first with its time reversed in the real part)."""
+    def hopf(a, b, s, w, c):
+        r2 = a * a + b * b
+        return s * a - w * b + c * a * r2, w * a + s * b + c * b * r2
+    d1, d2 = hopf(x[0], x[1], 1.0 - lam, 1.0, 1.0)
+    d3, d4 = hopf(x[2], x[3], lam - 1.0 - gap, 1.7, -1.0)
+    return jnp.stack([d1, d2, d3, d4])
+
+
+def test_hopf_pairs_crossing_in_opposite_directions_in_one_step_are_both_found():
+    """Steps of 0.2 from lam = 0.05 put 0.85 and 1.05 around both Hopf points: one pair leaves the right half plane
+    while the other enters it, so the unstable count (2) and the sign of the Hopf test function are the same at
+    both ends.  Matching the eigenvalues nearest the axis between the two points shows four crossings; the step is
+    shortened until each Hopf point has its own.  Before, neither was reported."""
+    br = continue_equilibria(EquilibriumProblem(opposite_hopf_pairs, 4, jnp.asarray(0.03)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5), np.zeros(4), 0.05)
+    hs = br.special_of("HOPF")
+    assert [round(h.lam, 9) for h in hs] == [1.0, 1.03], br.special
+    assert all(h.located for h in hs)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-9)
+
+
+def test_an_event_inside_a_step_that_ends_on_another_is_located_inside():
+    """Hopf points at 1.0 and 1.05, steps of 0.1 from 0.05: the step 0.95 -> 1.05 holds the first and ends exactly
+    on the second, whose factor makes the product test function vanish at the end.  The first is located at 1.0
+    (omega 1), the second at 1.05 (omega 1.7), each once, and no row is repeated.  Before, the end was taken as the
+    zero: the first Hopf was reported at 1.05 with the second's frequency, and 1.05 twice (review of this issue)."""
+    br = continue_equilibria(EquilibriumProblem(close_hopf_pairs, 4, jnp.asarray(0.05)),
+                             EquilibriumSettings(ds=0.1, ds_max=0.1, lam_max=1.5), np.zeros(4), 0.05)
+    hs = br.special_of("HOPF")
+    assert [round(h.lam, 9) for h in hs] == [1.0, 1.05], br.special
+    assert all(h.located for h in hs)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-9)
+    assert np.all(np.diff(br.lam) > 0)
+    assert [round(float(br.lam[h.index]), 9) for h in hs] == [1.0, 1.05]
+
+
+def test_opposite_crossings_closer_than_the_shortest_step_are_reported_unlocated():
+    """The opposite pairs 1e-9 apart: no step separates them, the unstable count does not change, only the match
+    sees the four crossings; after the last halving they are reported as two HOPF points, not located.  Before,
+    nothing was reported (review of this issue)."""
+    br = continue_equilibria(EquilibriumProblem(opposite_hopf_pairs, 4, jnp.asarray(1e-9)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5), np.zeros(4), 0.05)
+    hs = br.special_of("HOPF")
+    assert len(hs) == 2 and not any(h.located for h in hs), br.special
+    assert all(1.0 < h.lam < 1.2 for h in hs)
+
+
+def two_real_eigenvalues(x, lam, gap):
+    """x0' = (lam - 1) x0 - x0^3, x1' = (lam - 1 - gap) x1 - x1^3, x2' = -x2: along x = 0 two real eigenvalues
+    through 0, branch points (pitchforks) at lam = 1 and 1 + gap."""
+    return jnp.stack([(lam - 1.0) * x[0] - x[0] ** 3, (lam - 1.0 - gap) * x[1] - x[1] ** 3, -x[2]])
+
+
+@pytest.mark.parametrize("gap, located", [(0.05, True), (1e-9, False)])
+def test_two_real_eigenvalues_through_zero_in_one_step_are_two_branch_points(gap, located):
+    """Two real eigenvalues through 0 in one step of 0.2 change the Hopf test's sign as a neutral saddle would (a
+    sum of two reals through 0), which is classified away; that sign change must not count as explaining the two
+    crossings.  The step is refined: two BPs, located at 1 and 1 + gap when a step can separate them, reported
+    unlocated when not.  Before, nothing was reported and only the stability flag flipped (review)."""
+    br = continue_equilibria(EquilibriumProblem(two_real_eigenvalues, 3, jnp.asarray(gap)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=1.5), np.zeros(3), 0.05)
+    bps = br.special_of("BP")
+    assert len(bps) == 2 and [b.located for b in bps] == [located] * 2, br.special
+    assert not br.special_of("HOPF")
+    if located:
+        np.testing.assert_allclose([b.lam for b in bps], [1.0, 1.0 + gap], atol=1e-8)
+    else:
+        assert all(1.0 < b.lam < 1.2 for b in bps)
+
+
+def two_tori_field(x, lam, args):
+    """A unit-circle oscillator (u, v) of period 1 driving nothing, beside two linear planar systems with Floquet
+    multipliers exp(0.5 - lam) exp(+-i) (leaving the unit circle's outside at lam = 0.5) and exp(lam - 0.52)
+    exp(+-2i) (entering it at 0.52): two Neimark-Sacker points, angles 1 and 2 rad, in closed form."""
+    w = 2 * np.pi
+    u, v = x[0], x[1]
+    r2 = u * u + v * v
+    def planar(a, b, g, om):
+        return g * a - om * b, om * a + g * b
+    z1, z2 = planar(x[2], x[3], 0.5 - lam, 1.0)
+    y1, y2 = planar(x[4], x[5], lam - 0.52, 2.0)
+    return jnp.stack([u - w * v - u * r2, w * u + v - v * r2, z1, z2, y1, y2])
+
+
+def test_torus_pairs_crossing_in_opposite_directions_in_one_step_are_both_found():
+    """The cycle analogue: from lam = 0.33 with steps of 0.2, one step spans both NS points (0.5, a pair moving
+    inside; 0.52, a pair moving outside): the unstable count and the NS test's sign are unchanged.  Both are
+    located, with their angles.  Before, neither was reported."""
+    st = CycleSettings(m=4, N=10, ds=0.2, ds_max=0.2, max_points=8, lam_max=0.8)
+    start = start_from_function(lambda t: np.concatenate([np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)],
+                                                                    1), np.zeros((len(t), 4))], 1), 1.0, 0.33, st)
+    br = continue_cycles(CycleProblem(two_tori_field, 6), st, start)
+    ns = br.special_of("NS")
+    assert [round(s.lam, 7) for s in ns] == [0.5, 0.52], br.special
+    assert all(s.located for s in ns)
+    np.testing.assert_allclose([s.angle for s in ns], [1.0, 2.0], rtol=1e-6)
+
+
 def test_cycle_tests_ignore_which_small_multipliers_are_computed():
     """With a partial spectrum (Arnoldi's k leading multipliers) the smallest computed multiplier enters and leaves
     the set from point to point.  That must not change the sign of any test function: nothing crosses the unit

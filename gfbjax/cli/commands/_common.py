@@ -94,8 +94,9 @@ def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
                         f"default {SystemSpec.Nx}, in {limits.NX.interval()})")
     g.add_argument("--nz", type=int, default=None, metavar="N",
                    help="axial intervals over the half length, edge to mid-plane (SystemSpec.Nz; "
-                        f"default {SystemSpec.Nz}, in {limits.NZ.interval()}); the grid's (Nx - 1)(Nz + 1) states "
-                        f"plus the rotor's must not exceed {limits.MAX_DENSE_UNKNOWNS} (dense Jacobians)")
+                        f"default {SystemSpec.Nz}, in {limits.NZ.interval()}); the grid's (Nx - 1)(Nz + 1) "
+                        "states (about twice as many with axial_domain = \"full\") plus the "
+                        f"rotor's must not exceed {limits.MAX_DENSE_UNKNOWNS} (dense Jacobians)")
     g.add_argument("--out", type=Path, default=Path("results") / command, metavar="DIR",
                    help="output folder, created if needed and checked to be writable before any computation "
                         "(default: %(default)s)")
