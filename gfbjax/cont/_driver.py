@@ -154,9 +154,9 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
 
     ``g(s)`` returns (value, payload) and may return (nan, None) on failure.  Returns (s, payload, value,
     located): located when |g| <= tol times the larger end value (when that is below 1: then s is found to about
-    tol times s_hi, whatever the test function's scale), or when the bracket has shrunk below s_tol * s_hi with |g| below 1e-6 of
-    its end values (a continuous root); not located when g jumps across a closed bracket, when g_lo and g_hi do
-    not bracket a zero (no evaluation then) or when the iteration budget runs out.  An end value already within
+    tol times s_hi, whatever the test function's scale), or when the bracket has shrunk below s_tol * s_hi with
+    |g| below 1e-6 of its end values (a continuous root); not located when g jumps across a closed bracket, when
+    g_lo and g_hi do not bracket a zero (no evaluation then) or when the iteration budget runs out.  An end value already within
     ``tol`` is returned after one evaluation there (the point on the event) when a value just inside the end
     (1e-6 s_hi) shows no sign change in the interior.
     """
@@ -403,8 +403,8 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                 ds_unrefined = ds
             ds, refined = 0.5 * ds, refined + 1
             continue
-        if missing:  # refined as far as allowed: report, unlocated, what crossed
-            found += _unresolved(run, missing, Xn, an_n)
+        if missing and s.detect:  # refined as far as allowed: report, unlocated, what crossed
+            found += [f for f in _unresolved(run, missing, Xn, an_n) if f.kind in s.detect]
         # in the order of the branch: rows stay monotone in s, and an event at the step's end keeps its row index
         for f in sorted(found, key=lambda f: f.s if np.isfinite(f.s) else math.inf):
             _insert(run, f)

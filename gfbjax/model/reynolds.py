@@ -107,8 +107,8 @@ def ambient_clipped_rates(Pdot: Array, P: Array, width: float = 0.0, rate: float
 
     ``p' = Pdot`` above ambient (the Reynolds equation untouched, so transients and cycles above ambient are the
     model's own), ``p' = max(Pdot, rate (1 - p))`` at or below it: a node at ambient whose Reynolds rate ``Pdot`` is
-    negative stays at ambient, a node below ambient returns to it at ``rate``.  Its equilibria are those of the Reynolds equation with the
-    complementarity ``p >= 1``, ``Pdot <= 0``, ``(p - 1) Pdot = 0`` (the Swift-Stieber condition that clipping the
+    negative stays at ambient, a node below ambient returns to it at ``rate``.  Its equilibria are those of the
+    Reynolds equation with the complementarity ``p >= 1``, ``Pdot <= 0``, ``(p - 1) Pdot = 0`` (the Swift-Stieber condition that clipping the
     pressure in an iterative Reynolds solver converges to), so a steady film never drops below ambient.
 
     Args:
