@@ -479,7 +479,7 @@ def print_tables(recs: list[dict[str, Any]]) -> None:
               f"{f(dan, '.2e')} | {f(ae, '.4f')} | {ge['wall_s']:.3f} ({ge['compile_s']:.1f}) |")
 
     print("\n### Cycle branch from the Hopf point (N = 20, m = 4, fixed mesh, multipliers at every point)\n")
-    print("| n | tool | points | L reached | Newton its | branch [s] | s/point | time / AUTO (>1: slower) | compile [s] |")
+    print("| n | tool | points | L reached | Newton its | branch [s] | s/point | time per point / AUTO's | compile [s] |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in recs:
         au = (r["auto"] or {}).get("cycles")
@@ -488,8 +488,10 @@ def print_tables(recs: list[dict[str, Any]]) -> None:
                   f"{au['wall_s']:.3f} | {au['per_point_s']:.2e} | 1 | - |")
         for name, g in r["gfbjax"].get("cycles", {}).items():
             ratio = None if not au else g["per_point_s"] / au["per_point_s"]
+            which = "-" if ratio is None else (f"{ratio:.2g} ({ratio:.1f}x slower)" if ratio >= 1
+                                               else f"{ratio:.2g} ({1 / ratio:.1f}x faster)")
             print(f"| {r['n']} | gfbjax {name} | {g['points']} | {f(g['L_end'], '.4f')} | {g['newton_iterations']} | "
-                  f"{g['wall_s']:.2f} | {g['per_point_s']:.2e} | {f(ratio, '.1f')} | {g['compile_s']:.1f} |")
+                  f"{g['wall_s']:.2f} | {g['per_point_s']:.2e} | {which} | {g['compile_s']:.1f} |")
 
     print("\n### Matched points: period and leading non-trivial Floquet multipliers at the same L\n")
     print("| n | L | T AUTO | T gfbjax | abs dT | leading mu AUTO | leading mu gfbjax | max abs dmu | "

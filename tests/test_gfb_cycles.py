@@ -187,6 +187,14 @@ def test_sparse_backend_matches_dense(params, cycle):
     assert res.converged, res.outcome
     d = float(jnp.max(jnp.abs(res.x.to_flat() - cycle["orbit"].to_flat())))
     assert d < 1e-8, d
+    # the default (BlockKrylov): multipliers at or outside 0.9 to tol 1e-11, those further in to its documented
+    # residual tolerance 1e-6 (relative); asked for 1e-11 everywhere, all of them match the dense ones to 1e-8
     mu = cont.analyse(prob, lin)["spectrum"]
-    np.testing.assert_allclose(np.abs(mu[:8]), np.abs(cycle["mu"][:8]), atol=1e-8)
+    ref = np.abs(cycle["mu"][:8])
+    near = ref >= 0.9
+    assert near.sum() >= 1
+    np.testing.assert_allclose(np.abs(mu[:8])[near], ref[near], atol=1e-8)
+    np.testing.assert_allclose(np.abs(mu[:8]), ref, rtol=1e-6)
     assert trivial_error(mu) < 1e-8
+    tight = cont.analyse(prob, lin, cont.BlockKrylov(tol_inside=1e-11))["spectrum"]
+    np.testing.assert_allclose(np.abs(tight[:8]), ref, atol=1e-8)

@@ -16,7 +16,7 @@ Layers, bottom up:
   :class:`NewtonSettings`);
 * one continuation driver for equilibria and cycles (:func:`continue_equilibria`, :func:`continue_cycles`) with
   the algorithms :class:`PseudoArclength` and :class:`Natural`, test functions and their localisation;
-* Floquet methods (:class:`PeriodicQR`, :class:`TransferProduct`, :class:`Arnoldi`);
+* Floquet methods (:class:`PeriodicQR`, :class:`TransferProduct`, :class:`BlockKrylov`, :class:`Arnoldi`);
 * implicit derivatives through converged cycles (tangent and adjoint modes), batched (vmapped) corrections.
 
 Precision: the engine expects ``jax_enable_x64`` (``import gfbjax`` turns it on).
@@ -37,7 +37,7 @@ from ._cycles import (CycleStart as CycleStart, analyse as analyse, bind_solver 
                       start_from_pd as start_from_pd, start_from_samples as start_from_samples)
 from ._driver import locate as locate
 from ._equilibria import HopfPoint as HopfPoint, continue_equilibria as continue_equilibria, hopf_point as hopf_point
-from ._floquet import (Arnoldi as Arnoldi, FloquetMethod as FloquetMethod, PeriodicQR as PeriodicQR,
+from ._floquet import (Arnoldi as Arnoldi, BlockKrylov as BlockKrylov, FloquetMethod as FloquetMethod, PeriodicQR as PeriodicQR,
                        PeriodicQRResult as PeriodicQRResult, TransferProduct as TransferProduct,
                        multipliers_periodic as multipliers_periodic, multipliers_product as multipliers_product,
                        nontrivial as nontrivial, trivial_error as trivial_error)
@@ -56,7 +56,7 @@ from ._sparsity import (Coloring as Coloring, color_pattern as color_pattern, de
                         jacobian_values as jacobian_values)
 
 __all__ = [
-    "Arnoldi", "BatchNewtonResult", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
+    "Arnoldi", "BatchNewtonResult", "BlockKrylov", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
     "CycleSettings", "CycleStart",
     "DenseCondensation", "EquilibriumProblem", "EquilibriumSettings", "FloquetMethod", "HopfPoint",
     "LinearSolveError", "LinearSolver", "Linearisation", "Natural", "NewtonSettings", "NewtonSolution", "Orbit",

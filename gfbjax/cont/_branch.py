@@ -183,7 +183,8 @@ class Branch:
             states = {key: np.stack([p.state[key] for p in points]) for key in points[0].state}
             if shared_state:
                 states.update(shared_state)
-        # A Floquet method may compute more multipliers at some points (Arnoldi reaching inside the unit circle):
+        # A Floquet method may compute more multipliers at some points (a Krylov method reaching inside the unit
+        # circle):
         # the rows keep the first point's count, the largest in modulus (padded with NaN where fewer)
         mu = np.full((len(points), nmu), np.nan, complex)
         for i, p in enumerate(points):

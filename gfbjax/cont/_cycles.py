@@ -117,9 +117,9 @@ MEMORY_LIMIT = 4 * 2**30
 
 
 def _effective_floquet(problem: CycleProblem, settings: CycleSettings) -> FloquetMethod:
-    from ._floquet import Arnoldi, PeriodicQR
+    from ._floquet import BlockKrylov, PeriodicQR
     solver = choose_solver(settings.linear_solver, problem)
-    return settings.floquet or (Arnoldi() if isinstance(solver, SparseSweep) else PeriodicQR())
+    return settings.floquet or (BlockKrylov() if isinstance(solver, SparseSweep) else PeriodicQR())
 
 
 def check_cycle_size(problem: CycleProblem, N: int, m: int, settings: CycleSettings) -> None:
@@ -127,9 +127,9 @@ def check_cycle_size(problem: CycleProblem, N: int, m: int, settings: CycleSetti
     collocation system of N intervals of degree m would not fit in :data:`MEMORY_LIMIT`."""
     n = problem.n
     floquet = _effective_floquet(problem, settings)
-    from ._floquet import Arnoldi
-    if isinstance(floquet, Arnoldi) and min(floquet.k, n - 2) <= problem.n_trivial:
-        raise ValueError(f"Arnoldi(k={floquet.k}) computes min(k, n - 2) = {min(floquet.k, n - 2)} multipliers for "
+    from ._floquet import _Leading
+    if isinstance(floquet, _Leading) and min(floquet.k, n - 2) <= problem.n_trivial:
+        raise ValueError(f"{type(floquet).__name__}(k={floquet.k}) computes min(k, n - 2) = {min(floquet.k, n - 2)} multipliers for "
                          f"n = {n}, not more than the {problem.n_trivial} trivial one(s): stability could not be "
                          "judged; use a larger k, or floquet=PeriodicQR() with the dense solver")
     solver = choose_solver(settings.linear_solver, problem)
@@ -176,8 +176,8 @@ def analyse(problem: CycleProblem, lin: Linearisation, floquet: FloquetMethod | 
     """Floquet multipliers (``spectrum``, decreasing modulus), stability (``stable``: the non-trivial multipliers
     inside the unit circle) and ``trivial_error`` (distance of the multiplier closest to +1 from +1) of a converged
     orbit, from its linearisation ``lin``.  ``floquet``: the method (default: the linearisation's own, all
-    multipliers when dense, the leading ones by Arnoldi when sparse); ``memo``: a dict kept along a branch (warm
-    starts)."""
+    multipliers when dense, the leading ones by a block Krylov method when sparse); ``memo``: a dict kept along a
+    branch (warm starts)."""
     floquet = floquet or lin.default_floquet()
     mu = np.asarray(floquet.multipliers(lin, {} if memo is None else memo))
     nt = nontrivial(mu, problem.n_trivial)

@@ -21,7 +21,7 @@ on one side of a line:
   pair with product closest to 1 is complex, with its angle :math:`\arg\mu \in (0, \pi)`.
 
 Every factor is oriented to be positive for a multiplier (or pair) well inside the unit circle: (1 + mu),
-(1 - mu), (1 - mu_i mu_j).  With a partial spectrum (the k leading multipliers of :class:`~._floquet.Arnoldi`) the
+(1 - mu), (1 - mu_i mu_j).  With a partial spectrum (the k leading multipliers of :class:`~._floquet.BlockKrylov`) the
 smallest computed multiplier enters and leaves the set as the spectrum moves; with the other orientation each such
 change flipped the sign of the product, and a spurious BPC or NS was reported where nothing crossed the circle.
 

@@ -216,14 +216,12 @@ class TransferProduct(FloquetMethod):
 
 
 @dataclass(frozen=True)
-class Arnoldi(FloquetMethod):
-    """The ``k`` (or more) multipliers of largest modulus by ARPACK's implicitly restarted Arnoldi on the monodromy
-    operator (one sweep per product; the matrix is never formed).  tol: ARPACK's relative tolerance.  ``k`` is
-    doubled until the smallest computed multiplier has modulus below ``inside``: events happen on the unit circle,
-    and one at the edge of the computed set would be misread; once k would exceed n/2, all n multipliers are taken
-    from the explicit product of the transfer matrices instead (as :class:`TransferProduct`).  Along a branch the
-    start vector is the sum of the previous point's Ritz vectors (the leading subspace moves little between
-    points; saves about a quarter of the sweeps)."""
+class _Leading(FloquetMethod):
+    """The ``k`` (or more) multipliers of largest modulus, by a Krylov method on the monodromy operator (the
+    matrix is never formed).  tol: relative tolerance of each multiplier's eigen-residual.  ``k`` is doubled until
+    the smallest computed multiplier has modulus below ``inside``: events happen on the unit circle, and one at
+    the edge of the computed set would be misread; once k would exceed n/2, all n multipliers are taken from the
+    explicit product of the transfer matrices instead (as :class:`TransferProduct`)."""
 
     k: int = 12
     tol: float = 1e-11
@@ -231,10 +229,16 @@ class Arnoldi(FloquetMethod):
 
     def __post_init__(self) -> None:
         from ._problem import check_range
-        check_range("Arnoldi k (number of multipliers)", self.k, 1, 10**6, integer=True)
-        check_range("Arnoldi tol", self.tol, 0.0, 1.0, lo_open=True, hi_open=True)
-        check_range("Arnoldi inside", self.inside, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range(f"{type(self).__name__} k (number of multipliers)", self.k, 1, 10**6, integer=True)
+        check_range(f"{type(self).__name__} tol", self.tol, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range(f"{type(self).__name__} inside", self.inside, 0.0, 1.0, lo_open=True, hi_open=True)
 
+
+@dataclass(frozen=True)
+class Arnoldi(_Leading):
+    """The leading multipliers (see :class:`_Leading` for ``k``, ``tol``, ``inside``) by ARPACK's implicitly
+    restarted Arnoldi, one sweep per product.  Along a branch the start vector is the sum of the previous point's
+    Ritz vectors (the leading subspace moves little between points; saves about a quarter of the sweeps)."""
     def multipliers(self, lin, memo: dict) -> np.ndarray:
         # Every bifurcation happens on the unit circle: the computed set must reach well inside it.  With k
         # multipliers at or near the circle (a torus branch with several pairs outside) the critical pair can be
@@ -274,3 +278,125 @@ class Arnoldi(FloquetMethod):
             return mu[np.argsort(-np.abs(mu), kind="stable")]
         memo["arnoldi_start"] = None
         raise LinearSolveError(f"Arnoldi (ARPACK) did not converge for the {k} leading Floquet multipliers: {err}")
+
+
+@dataclass(frozen=True)
+class BlockKrylov(_Leading):
+    r"""The leading multipliers (see :class:`_Leading` for ``k``, ``tol``, ``inside``) by Rayleigh-Ritz on a block
+    Krylov space of the monodromy operator, grown without restarts.
+
+    The space is :math:`\mathrm{span}\{V_0, MV_0, M^2V_0, \dots\}` with a start block :math:`V_0` of ``block``
+    columns: the previous point's leading Ritz vectors (the dominant subspace moves little along a branch) filled
+    up with fixed pseudo-random columns (so that no direction is missed).  Each product is one block sweep of the
+    linearisation (``monodromy_matmat``), whose factorisations are read once per block instead of once per vector.
+    Because every product :math:`MQ` is kept, each Ritz pair's residual :math:`\|MQy - \theta Qy\|` is computed
+    exactly, not estimated; the space grows until it is at most ``tol`` :math:`|\theta|` for every returned
+    multiplier of modulus at least ``inside``, and ``tol_inside`` :math:`|\theta|` for those further in.  Those
+    only show that nothing else is near the unit circle, and enter the test functions as factors far from zero
+    (an error there scales a test function, it does not move its zero); the GFB's film modes crowd there in a
+    continuum, where a tight tolerance would need a space about twice as large.  If ``max_dim`` columns do not
+    suffice, the multipliers come from :class:`Arnoldi` instead.
+    """
+
+    block: int = 16
+    max_dim: int = 640
+    tol_inside: float = 1e-6
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        from ._problem import check_range
+        check_range("BlockKrylov block", self.block, 1, 10**4, integer=True)
+        check_range("BlockKrylov max_dim", self.max_dim, 2, 10**6, integer=True)
+
+    def multipliers(self, lin, memo: dict) -> np.ndarray:
+        n = lin.orbit.n
+        if 2 * min(self.k, n - 2) > n:
+            mu = multipliers_product(lin.transfer_matrices())
+            return mu[np.argsort(-np.abs(mu), kind="stable")]
+        out = krylov_leading(lin.monodromy_matmat, n, k=min(self.k, n - 2), inside=self.inside, tol=self.tol,
+                             tol_inside=self.tol_inside, block=self.block, max_dim=min(self.max_dim, n),
+                             start=memo.get("krylov_start"))
+        if out is None:  # not converged within max_dim: the restarted method (ARPACK) takes over
+            memo["krylov_start"] = None
+            return Arnoldi(self.k, self.tol, self.inside).multipliers(lin, memo)
+        mu, basis = out
+        if 2 * len(mu) > n:  # most of the spectrum is wanted: all of it, from the explicit product
+            mu = multipliers_product(lin.transfer_matrices())
+            return mu[np.argsort(-np.abs(mu), kind="stable")]
+        memo["krylov_start"] = basis
+        return mu
+
+
+def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_inside: float, block: int,
+                   max_dim: int,
+                   start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """Leading eigenvalues of the operator ``matmat`` ((n, b) -> (n, b)) by block Krylov Rayleigh-Ritz (see
+    :class:`BlockKrylov`).  Returns (eigenvalues sorted by decreasing modulus, an orthonormal real basis (n, c) of
+    their Ritz vectors for the next start), or None when ``max_dim`` columns did not converge them.
+
+    The count returned is k, doubled while the smallest has modulus >= ``inside``, plus one where the cut would
+    separate a complex pair from its conjugate."""
+    b = max(1, min(block, n))
+    fill = np.random.default_rng(0).standard_normal((n, b))
+    if start is None or start.shape[0] != n:
+        V0 = fill
+    else:  # the previous point's Ritz basis, topped up with fixed pseudo-random columns to a whole block
+        V0 = np.concatenate([start, fill], axis=1)[:, :max(b, start.shape[1])]
+    Q = _orthonormal(V0, None, drop=True)
+    Qs, Ws = [Q], []
+    while True:
+        Ws.append(np.asarray(matmat(Qs[-1]), float))
+        Qa, Wa = np.concatenate(Qs, axis=1), np.concatenate(Ws, axis=1)
+        theta, Y = np.linalg.eig(Qa.T @ Wa)
+        order = np.argsort(-np.abs(theta), kind="stable")
+        theta, Y = theta[order], Y[:, order]
+        count = _wanted(theta, k, inside)
+        dim = Qa.shape[1]
+        if count <= dim:
+            Yc = Y[:, :count]
+            res = np.linalg.norm(Wa @ Yc - (Qa @ Yc) * theta[:count], axis=0)
+            need = np.where(np.abs(theta[:count]) >= inside, tol, tol_inside) * np.abs(theta[:count])
+            if np.all(res <= need) or dim >= n:
+                return theta[:count], _orthonormal(np.concatenate([(Qa @ Yc).real, (Qa @ Yc).imag], axis=1),
+                                                   None, drop=True)
+        if dim >= max_dim:
+            return None
+        nxt = _orthonormal(Ws[-1][:, :max_dim - dim], Qa, drop=True)
+        if nxt.shape[1] == 0:  # the space is invariant: fill with fresh directions
+            nxt = _orthonormal(np.random.default_rng(dim).standard_normal((n, min(b, max_dim - dim))), Qa,
+                               drop=True)
+            if nxt.shape[1] == 0:
+                return None
+        Qs.append(nxt)
+
+
+def _wanted(theta: np.ndarray, k: int, inside: float) -> int:
+    count = min(k, len(theta))
+    while count < len(theta) and abs(theta[count - 1]) >= inside:
+        count = min(2 * count, len(theta))
+    if count < len(theta) and theta[count - 1].imag != 0 and np.isclose(theta[count], np.conj(theta[count - 1])):
+        count += 1
+    return count if abs(theta[count - 1]) < inside else len(theta) + 1  # all at or outside: grow the space
+
+
+def _orthonormal(V: np.ndarray, against: np.ndarray | None, drop: bool = False) -> np.ndarray:
+    """Orthonormal columns spanning V minus its part in span(against) (orthonormal); two passes of classical
+    Gram-Schmidt then a QR; with ``drop`` the columns that were (numerically) inside are left out."""
+    import scipy.linalg as sla
+
+    V = np.array(V, float)
+    scale = float(np.max(np.linalg.norm(V, axis=0), initial=0.0))
+    if against is not None:
+        for _ in range(2):
+            V -= against @ (against.T @ V)
+    if not drop:
+        return np.linalg.qr(V)[0]
+    Q, R, _ = sla.qr(V, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(R)) > 1e-10 * max(scale, 1e-300)))
+    Q = Q[:, :rank]
+    if against is not None and rank:
+        # a column that lost most of its length to the projection keeps rounding errors of the original size:
+        # orthogonalise the normalised columns once more
+        Q -= against @ (against.T @ Q)
+        Q = np.linalg.qr(Q)[0]
+    return Q

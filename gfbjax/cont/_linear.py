@@ -20,8 +20,8 @@ adjoint gradients), the transfer matrices :math:`\Gamma_j` and the monodromy ope
 *Dense condensation* (AUTO's condensation of parameters, batched dense QR per interval, then a block elimination;
 everything compiled, one kernel per Newton solve): all n multipliers; cost :math:`O(N (mn)^3)`, for n up to ~150.
 *Sparse sweep* (per-interval SuperLU factorisations of the sparse collocation blocks, GMRES on the (n+2) reduced
-system, on the host; :mod:`._sparse`): the leading multipliers by Arnoldi; cost linear in N and close to linear
-in n for banded Jacobians, for large n.
+system, on the host; :mod:`._sparse`): the leading multipliers by a block Krylov method; cost linear in N and
+close to linear in n for banded Jacobians, for large n.
 """
 from __future__ import annotations
 
@@ -76,6 +76,11 @@ class Linearisation(abc.ABC):
     @abc.abstractmethod
     def monodromy_rmatvec(self, y: np.ndarray) -> np.ndarray:
         """M^T y."""
+
+    def monodromy_matmat(self, V: np.ndarray) -> np.ndarray:
+        """M V for a block V (n, b); column by column unless a linearisation can do better."""
+        V = np.asarray(V, float)
+        return np.stack([self.monodromy_matvec(V[:, i]) for i in range(V.shape[1])], axis=1)
 
     @abc.abstractmethod
     def sweep(self, dx0: np.ndarray, dp: np.ndarray, c: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -253,22 +258,30 @@ class DenseCondensation(LinearSolver):
 
 @dataclass(frozen=True)
 class SparseSweep(LinearSolver):
-    """Per-interval sparse LU + GMRES on the reduced system + Arnoldi multipliers (needs
+    """Per-interval sparse LU + GMRES on the reduced system + block Krylov multipliers (needs
     ``CycleProblem.jac_sparsity``).  gmres_rtol: relative GMRES tolerance of each solve (the Newton test on the
     true residual decides convergence); gmres_restart, gmres_maxiter: GMRES restart length and restarts (the
     reduced system has n + 2 unknowns and its spectrum clusters at 1: 15-30 iterations suffice on the GFB, and
     where more are needed the system is nearly singular, next to a branch point, and more restarts only delay
     the failure that halves the step: 20 restarts made the Brusselator branch 2.8x slower there);
+    gmres_forcing: the loosest relative tolerance of a Newton step's GMRES solve, which is solved to
+    max(gmres_rtol, min(gmres_forcing, residual)) (inexact Newton; tangents and other solves use gmres_rtol);
+    chord: a Newton step reuses the last factorisations while the residual is below ``chord`` times the residual
+    where they were made (0: a new factorisation at every step); the converged orbit always gets its own;
     permc_spec: SuperLU column ordering."""
 
     name = "sparse"
     gmres_rtol: float = 1e-11
     gmres_restart: int = 120
     gmres_maxiter: int = 4
+    gmres_forcing: float = 1e-3
+    chord: float = 1e-2
     permc_spec: str = "COLAMD"
 
     def __post_init__(self) -> None:
         check_range("gmres_rtol", self.gmres_rtol, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_range("gmres_forcing", self.gmres_forcing, self.gmres_rtol, 1.0, hi_open=True)
+        check_range("chord", self.chord, 0.0, 1.0, hi_open=True)
         check_range("gmres_restart", self.gmres_restart, 1, 10**6, integer=True)
         check_range("gmres_maxiter", self.gmres_maxiter, 1, 10**6, integer=True)
         if self.permc_spec not in ("COLAMD", "NATURAL", "MMD_ATA", "MMD_AT_PLUS_A"):

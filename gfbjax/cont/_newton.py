@@ -122,11 +122,16 @@ def _tree_max_abs(tree: Any) -> jax.Array:
     return jnp.max(jnp.stack(leaves)) if leaves else jnp.asarray(0.0)
 
 
+def _accepts(s: _State, rnorm, cfg: NewtonSettings):
+    """Whether an evaluation with residual ``rnorm`` ends the iteration as converged (the residual check)."""
+    return s.pending & jnp.isfinite(rnorm) & (rnorm <= jnp.maximum(cfg.tol, 10.0 * s.rnorm))
+
+
 def _advance(s: _State, rnorm, dx, t_fn, aux, scale_fn, cfg: NewtonSettings) -> tuple[_State, Any]:
     """One transition of the iteration (see the module docstring); works on traced and on concrete values.
     Returns the new state and whether the evaluation just made converged (its ``aux`` belongs to the result)."""
     dnorm = _tree_max_abs(dx)
-    converged = s.pending & jnp.isfinite(rnorm) & (rnorm <= jnp.maximum(cfg.tol, 10.0 * s.rnorm))
+    converged = _accepts(s, rnorm, cfg)
     finite = jnp.isfinite(rnorm) & jnp.isfinite(dnorm)
     diverged = (s.it >= 2) & (dnorm > cfg.divergence * s.best)
     exhausted = s.it >= cfg.max_iter
@@ -185,10 +190,14 @@ def solve(linearise: Callable[[Any], tuple[Any, Any, Any]], x0: Any, settings: N
     return _solution(s, aux)
 
 
-def solve_host(linearise: Callable[[Any], tuple[Any, Any, Any]], x0: Any, settings: NewtonSettings, *,
+def solve_host(linearise: Callable[..., tuple[Any, Any, Any]], x0: Any, settings: NewtonSettings, *,
                damping: Callable[[Any, Any, Any], Any] | None = None,
-               scale: Callable[[Any], Any] = _tree_max_abs) -> NewtonSolution:
+               scale: Callable[[Any], Any] = _tree_max_abs, knows_acceptance: bool = False) -> NewtonSolution:
     """The same iteration as :func:`solve`, stepped from Python (``linearise`` may use host linear algebra).
+
+    With ``knows_acceptance`` it is called as ``linearise(x, accepts)``, where ``accepts(rnorm) -> bool`` says
+    whether that residual ends the iteration as converged: the step is then never taken, and an expensive solve
+    for it can be skipped (return any ``dx`` of the right structure).
 
     A :class:`LinearSolveError` from ``linearise`` ends the solve with ``Outcome.LINEAR_SOLVE_FAILED`` (the last
     iterate is returned); every other exception propagates."""
@@ -196,7 +205,11 @@ def solve_host(linearise: Callable[[Any], tuple[Any, Any, Any]], x0: Any, settin
     s, kept = _init(x0), None
     while True:
         try:
-            rnorm, dx, aux = linearise(s.x)
+            if knows_acceptance:
+                state = s
+                rnorm, dx, aux = linearise(s.x, lambda r: bool(_accepts(state, jnp.asarray(r), settings)))
+            else:
+                rnorm, dx, aux = linearise(s.x)
         except LinearSolveError:
             return NewtonSolution(x=s.x, aux=None, code=Outcome.LINEAR_SOLVE_FAILED.code, iterations=s.it,
                                   residual=s.rnorm, step=s.dnorm)

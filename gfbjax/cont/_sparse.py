@@ -20,13 +20,18 @@ equations (27)-(30) and solves the same Newton system another way:
    :math:`[I - M,\ -g;\ \phi^T,\ \psi]` with M the monodromy matrix: its eigenvalues cluster at 1 (the stiff,
    strongly damped multipliers are ~0), so GMRES needs about as many iterations as there are multipliers
    that are not small.
-3. **Floquet multipliers** are the leading eigenvalues of M (:class:`._floquet.Arnoldi`, one homogeneous sweep
-   per product).  Only the largest in modulus are computed: they decide stability, and the rest are below any
-   bifurcation's reach.
+3. **Floquet multipliers** are the leading eigenvalues of M (:class:`._floquet.BlockKrylov`: block sweeps, one
+   right-hand side per column).  Only the largest in modulus are computed: they decide stability, and the rest
+   are below any bifurcation's reach.
 
 Per linearisation the cost is N sparse LU factorisations of size mn plus a few tens of sweeps, all linear in N.
 Newton itself is the one corrector of :mod:`._newton`, stepped from the host (``solve_host``); this module
 supplies its linearisation, and the transposed solve (:meth:`_Linearisation.solve_transpose`) for adjoint gradients.
+Two economies in the correction (:meth:`SparseCollocation.correct`, settings of :class:`~._linear.SparseSweep`):
+chord steps on the last factorisations while the residual keeps falling fast (``chord``), and step solves to a
+loose GMRES tolerance (``gmres_forcing``); the converged orbit always gets its own linearisation, so the tangent
+and the multipliers are exact there.  The blocks' fill-reducing column order is computed once per solver (every
+block has the same pattern).
 """
 from __future__ import annotations
 
@@ -93,12 +98,26 @@ def _sparse_linearisation(o: "SparseCollocation", orbit: col.Orbit, con: col.Con
     for j in range(Kd.shape[0]):
         K = sps.csc_matrix((Kd[j], o._K_indices, o._K_indptr), shape=(mn, mn))
         try:
-            lus.append(spla.splu(K, permc_spec=o.settings.permc_spec))
+            lus.append(o._factorise(K))
         except RuntimeError as e:  # "Factor is exactly singular"
             raise LinearSolveError(f"collocation block of interval {j} is singular: {e}") from e
         AL.append(sps.csr_matrix((ALd[j], o._AL_indices, o._AL_indptr), shape=(mn, n)))
     coef, cp, _ = _coeffs(orbit, con, o.scheme)
     return IntervalSweeps(orbit, o.scheme.m, lus, AL, Bp, np.asarray(coef), np.asarray(cp), o.settings)
+
+
+class _PermutedLU:
+    """SuperLU of K with a column order fixed in advance: ``lu`` factorises K[:, order] (no ordering of its own).
+    The ``solve(b, trans)`` of K itself."""
+
+    def __init__(self, K: sps.csc_matrix, order: np.ndarray, inverse: np.ndarray):
+        # order: the columns of K in factorisation order; inverse: its inverse permutation
+        self.lu, self.order, self.inverse = spla.splu(K[:, order], permc_spec="NATURAL"), order, inverse
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        if trans == "T":  # (K P)^T z = P^T b
+            return self.lu.solve(b[self.order], trans="T")
+        return self.lu.solve(b)[self.inverse]  # K P y = b, x = P y
 
 
 class SparseCollocation(BoundSolver):
@@ -128,6 +147,20 @@ class SparseCollocation(BoundSolver):
         rowsA = (np.arange(m)[:, None] * n + R[None]).ravel()
         self._AL_indices = np.tile(C, m).astype(np.int32)
         self._AL_indptr = np.searchsorted(rowsA, np.arange(m * n + 1)).astype(np.int32)
+        self._order: tuple[np.ndarray, np.ndarray] | None = None  # column order of the blocks, from the first
+
+    def _factorise(self, K: sps.csc_matrix) -> Any:
+        """SuperLU of one interval block.  Every block of every orbit has the same pattern, so the fill-reducing
+        column order (``permc_spec``) is computed once, from the first, and given to the rest (a fifth of the
+        factorisation time on the GFB)."""
+        if self._order is None:
+            lu = spla.splu(K, permc_spec=self.settings.permc_spec)
+            position = np.asarray(lu.perm_c)  # SuperLU's perm_c: where each column of K goes
+            cols = np.empty_like(position)
+            cols[position] = np.arange(len(position))  # the columns of K in factorisation order
+            self._order = (cols, position)
+            return lu
+        return _PermutedLU(K, *self._order)
 
     def linearise(self, orbit: col.Orbit, con: col.Constraint | None = None) -> IntervalSweeps:
         return _sparse_linearisation(self, orbit, con if con is not None else col.natural_constraint(orbit,
@@ -140,16 +173,37 @@ class SparseCollocation(BoundSolver):
         N, m, n = orbit.N, self.scheme.m, self.n
         f, args = self.problem.f, self.problem.args
 
-        def linearise(o):
+        chord = self.settings.chord if newton.verify_residual else 0.0
+        # the factorisations a chord step may reuse, the residual where they were made, and the last residual
+        made = {"lin": None, "rnorm": np.inf, "last": np.inf}
+
+        def linearise(o, accepts):
             rc, rper, rs = (np.asarray(a) for a in _residual(f, args, o, con, self.scheme))
             rnorm = _max_abs(rc, rper, rs)
             if not np.isfinite(rnorm):  # ends the iteration as NONFINITE without a factorisation
                 return rnorm, col.Orbit(jnp.zeros_like(o.mesh), o.xm * np.nan, o.xi, o.T, o.lam), None
-            lin = self.linearise(o, con)
-            d = lin.solve(-rc, -rper, -rs)
+            if accepts(rnorm):  # converged here: the linearisation at this orbit gives the tangent, no step
+                lin = self.linearise(o, con)
+                return rnorm, col.Orbit(jnp.zeros_like(o.mesh), jnp.zeros_like(o.xm), jnp.zeros_like(o.xi),
+                                        jnp.zeros_like(o.T), jnp.zeros_like(o.lam)), lin
+            # chord step: once the residual has fallen well below the one where the blocks were factorised, the
+            # old factorisations still give a step that converges fast (the Jacobian moved by about the
+            # correction so far); only the converged orbit needs its own (for the tangent and the multipliers)
+            lin, last = made["lin"], made["last"]
+            # inexact Newton: the step's GMRES need only be as accurate as the residual it removes (forcing term
+            # of Dembo, Eisenstat and Steihaug, proportional to the residual: the convergence stays quadratic);
+            # a chord step converges only linearly, at the rate just seen, and a tenth of that rate is enough
+            rtol = min(self.settings.gmres_forcing, rnorm)
+            if lin is None or not rnorm <= chord * made["rnorm"]:
+                lin = self.linearise(o, con)
+                made.update(lin=lin, rnorm=rnorm)
+            else:
+                rtol = min(self.settings.gmres_forcing, max(rtol, 0.1 * rnorm / last))
+            made["last"] = rnorm
+            d = lin.solve(-rc, -rper, -rs, rtol=max(self.settings.gmres_rtol, rtol))
             return rnorm, col.Orbit(jnp.zeros_like(o.mesh), d.xm, d.xi, d.T, d.lam), lin
 
-        sol = solve_host(linearise, orbit, newton, scale=lambda o: jnp.max(jnp.abs(o.xm)))
+        sol = solve_host(linearise, orbit, newton, scale=lambda o: jnp.max(jnp.abs(o.xm)), knows_acceptance=True)
         if not sol.converged:
             return sol, None
         lin = sol.aux

@@ -116,20 +116,22 @@ class IntervalSweeps(Linearisation):
         U = np.concatenate([xm[:-1, None], w, xm[1:, None]], axis=1)
         return np.einsum("ajin,jin->a", self.coef, U) + self.cp @ dp
 
-    def _gmres(self, matvec, b: np.ndarray) -> np.ndarray:
+    def _gmres(self, matvec, b: np.ndarray, rtol: float | None = None) -> np.ndarray:
         s = self.gmres
         n2 = len(b)
         if float(np.linalg.norm(b)) == 0.0:
             return np.zeros(n2)
         A = spla.LinearOperator((n2, n2), matvec=matvec, dtype=float)
-        v, info = spla.gmres(A, b, rtol=s.gmres_rtol, atol=0.0, restart=min(n2, s.gmres_restart),
+        v, info = spla.gmres(A, b, rtol=s.gmres_rtol if rtol is None else rtol, atol=0.0,
+                             restart=min(n2, s.gmres_restart),
                              maxiter=s.gmres_maxiter)
         if info != 0 or not np.all(np.isfinite(v)):
             raise LinearSolveError(f"GMRES did not converge (info={info})")
         return v
 
     # ---- the Linearisation protocol
-    def solve(self, rc, rper, rs) -> col.Orbit:
+    def solve(self, rc, rper, rs, rtol: float | None = None) -> col.Orbit:
+        """J^{-1} (rc, rper, rs); ``rtol``: GMRES's relative tolerance (default the settings' ``gmres_rtol``)."""
         n = self.n
         c = np.asarray(rc).reshape(len(self.lus), -1)
         xp, wp = self.sweep(np.zeros(n), np.zeros(2), c)
@@ -139,7 +141,7 @@ class IntervalSweeps(Linearisation):
             xm, w = self.sweep(v[:n], v[n:])
             return np.concatenate([v[:n] - xm[-1], self._border(xm, w, v[n:])])
 
-        v = self._gmres(matvec, b)
+        v = self._gmres(matvec, b, rtol)
         xm, w = self.sweep(v[:n], v[n:], c)
         return col.Orbit(self.orbit.mesh, jnp.asarray(xm), jnp.asarray(w), jnp.asarray(v[n]), jnp.asarray(v[n + 1]))
 
@@ -163,13 +165,22 @@ class IntervalSweeps(Linearisation):
     def monodromy_matvec(self, v: np.ndarray) -> np.ndarray:
         return self.sweep(np.asarray(v, float), np.zeros(2))[0][-1]
 
+    def monodromy_matmat(self, V: np.ndarray) -> np.ndarray:
+        """M V for a block V (n, b): one sweep with b right-hand sides per factorisation, which reads each factor
+        from memory once for the whole block (per vector about 4x cheaper than b single sweeps at b = 16)."""
+        k = (self.m - 1) * self.n
+        x = np.asarray(V, float)
+        for lu, AL in zip(self.lus, self.AL):
+            x = lu.solve(-(AL @ x))[k:]
+        return x
+
     def monodromy_rmatvec(self, y: np.ndarray) -> np.ndarray:
         """M^T y (M = Gamma_{N-1}...Gamma_0, Gamma_j = -E K_j^{-1} A_{L,j} with E the last n rows)."""
         return -(self.AL[0].T @ self.adjoint_sweep(np.asarray(y, float))[0])
 
     def default_floquet(self):
-        from ._floquet import Arnoldi
-        return Arnoldi()
+        from ._floquet import BlockKrylov
+        return BlockKrylov()
 
     def transfer_matrices(self) -> np.ndarray:
         """Gamma_j (N, n, n) (n right-hand sides per interval: for branch switching, not per point)."""

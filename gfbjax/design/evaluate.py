@@ -56,7 +56,7 @@ class CycleEvaluation:
     """One cycle at ``(alpha_f, eta)`` and speed ``omega`` (Omega_bar).
 
     energy: works per cycle [p0 R L c]; multipliers: Floquet multipliers (decreasing modulus; all of them with the
-    dense solver, the leading ones (Arnoldi) with the sparse one); max_mu: largest non-trivial modulus;
+    dense solver, the leading ones (block Krylov) with the sparse one); max_mu: largest non-trivial modulus;
     grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None."""
 
     alpha_f: float

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import gfbjax.cont._floquet as floquet_module
-from gfbjax.cont import (Arnoldi, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
+from gfbjax.cont import (Arnoldi, BlockKrylov, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
                          LinearSolveError, Natural, Outcome, SparseSweep, continue_cycles, continue_equilibria,
                          correct_cycle, hopf_point, start_from_function, start_from_hopf)
 from cont_systems import stuart_landau
@@ -38,8 +38,11 @@ def test_floquet_method_must_see_past_the_trivial_multiplier():
     st = CycleSettings(m=3, N=6, max_points=2, floquet=Arnoldi(k=1))
     with pytest.raises(ValueError, match="Arnoldi"):
         continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W), jac_sparsity=pattern), st, _sl_start(st))
-    st = CycleSettings(m=3, N=6, max_points=2, linear_solver=SparseSweep())  # n = 2: Arnoldi gets n - 2 = 0
-    with pytest.raises(ValueError, match="Arnoldi"):
+    st = CycleSettings(m=3, N=6, max_points=2, floquet=BlockKrylov(k=1))
+    with pytest.raises(ValueError, match="BlockKrylov"):
+        continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W), jac_sparsity=pattern), st, _sl_start(st))
+    st = CycleSettings(m=3, N=6, max_points=2, linear_solver=SparseSweep())  # n = 2: the default gets n - 2 = 0
+    with pytest.raises(ValueError, match="BlockKrylov"):
         continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W), jac_sparsity=pattern), st, _sl_start(st))
 
 

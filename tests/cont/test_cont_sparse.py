@@ -220,3 +220,121 @@ def test_adjoint_gradients_agree_on_both_solvers():
     np.testing.assert_allclose(grads["dense"][1], 0.0, atol=1e-9)
     np.testing.assert_allclose(grads["sparse"], grads["dense"], rtol=1e-8, atol=1e-10)
     np.testing.assert_allclose(mus["sparse"][1], mus["dense"][1], rtol=1e-7, atol=1e-10)
+
+
+# ---------------------------------------------------------------- block Krylov multipliers, inexact and chord Newton
+def test_block_krylov_multipliers_analytic(setup):
+    """BlockKrylov (the sparse default) on the ring, whose multipliers come in equal pairs (modes q and K - q):
+    the ones at or outside ``inside`` to 1e-9 of the closed form, the rest to their looser residual tolerance;
+    the same as ARPACK's."""
+    prob, sch, guess = setup
+    settings = cont.CycleSettings(newton_tol=1e-10, newton_step_tol=1e-10)
+    res, lin = bind_solver(prob, sch, settings).correct(guess, col.natural_constraint(guess, LAM), settings.newton)
+    assert res.converged
+    mu = cont.BlockKrylov(k=12).multipliers(lin, {})
+    assert len(mu) >= 12 and abs(mu[-1]) < 0.9
+    exact = analytic_multipliers(K, LAM, W, D)[: len(mu)]
+    got = np.sort(np.abs(mu))[::-1]
+    outside = exact >= 0.9
+    assert outside.sum() >= 5  # the test covers the tight tolerance, pairs included
+    np.testing.assert_allclose(got[outside], exact[outside], atol=1e-9)
+    np.testing.assert_allclose(got, exact, atol=1e-5)
+    arpack = Arnoldi(k=len(mu)).multipliers(lin, {})
+    np.testing.assert_allclose(np.abs(arpack[: outside.sum()]), got[outside], atol=1e-9)
+
+
+def test_block_product_equals_single_products(setup):
+    prob, sch, guess = setup
+    lin = SparseSweep().bind(prob, sch).linearise(guess)
+    V = np.random.default_rng(1).standard_normal((prob.n, 5))
+    single = np.stack([lin.monodromy_matvec(V[:, i]) for i in range(5)], axis=1)
+    np.testing.assert_allclose(lin.monodromy_matmat(V), single, rtol=0, atol=1e-12 * np.max(np.abs(single)))
+
+
+def _operator(eigs, n, seed=0):
+    """A real n x n matrix with the given leading eigenvalues (a complex value brings its conjugate) and the
+    rest uniformly in [0, 0.2), in a random, non-orthogonal basis."""
+    rng = np.random.default_rng(seed)
+    B = np.zeros((n, n))
+    i = 0
+    for e in eigs:
+        if np.iscomplex(e):
+            B[i:i + 2, i:i + 2] = [[e.real, e.imag], [-e.imag, e.real]]
+            i += 2
+        else:
+            B[i, i] = e
+            i += 1
+    B[i:, i:] = np.diag(rng.uniform(0.0, 0.2, n - i))
+    S = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
+    return S @ B @ np.linalg.inv(S)
+
+
+def test_krylov_keeps_a_complex_pair_together_at_the_cut():
+    """k = 3 would cut the pair 0.5 +- 0.2i: both members are returned, never one (which would read as real)."""
+    from gfbjax.cont._floquet import krylov_leading
+    A = _operator([1.0, 0.95, 0.5 + 0.2j], 60)
+    mu, _ = krylov_leading(lambda V: A @ V, 60, k=3, inside=0.9, tol=1e-11, tol_inside=1e-11, block=4, max_dim=60)
+    np.testing.assert_allclose(np.sort_complex(mu), np.sort_complex([0.5 - 0.2j, 0.5 + 0.2j, 0.95, 1.0]), atol=1e-9)
+
+
+def test_krylov_returns_past_every_multiplier_outside_inside():
+    """Seven multipliers at or outside 0.9 with k = 4: k doubles until the smallest returned is inside 0.9."""
+    from gfbjax.cont._floquet import krylov_leading
+    lead = [1.3, 1.1 + 0.3j, 1.0, 0.97 + 0.1j, 0.92, 0.6]
+    A = _operator(lead, 80, seed=3)
+    mu, _ = krylov_leading(lambda V: A @ V, 80, k=4, inside=0.9, tol=1e-11, tol_inside=1e-11, block=4, max_dim=80)
+    assert abs(mu[-1]) < 0.9 and len(mu) == 8
+    np.testing.assert_allclose(np.sort_complex(mu[:7]), np.sort_complex(
+        [1.3, 1.1 + 0.3j, 1.1 - 0.3j, 1.0, 0.97 + 0.1j, 0.97 - 0.1j, 0.92]), atol=1e-9)
+
+
+def test_krylov_without_convergence_in_max_dim_gives_none():
+    from gfbjax.cont._floquet import krylov_leading
+    A = _operator([1.0, 0.95, 0.9 + 0.1j], 80, seed=5)
+    assert krylov_leading(lambda V: A @ V, 80, k=4, inside=0.9, tol=1e-14, tol_inside=1e-14, block=2,
+                          max_dim=4) is None
+
+
+def test_inexact_chord_newton_converges_to_the_exact_newton_orbit(setup, monkeypatch):
+    """The default sparse corrector (GMRES to a tolerance that follows the residual, factorisations reused while
+    the residual falls) converges to the same orbit as exact Newton (a factorisation and a full GMRES solve at
+    every step), with fewer factorisations, and leaves the converged orbit its own linearisation."""
+    prob, sch, guess = setup
+    con = col.natural_constraint(guess, LAM)
+    newton = cont.NewtonSettings(tol=1e-10, atol_step=1e-10, rtol_step=1e-10, max_iter=12)
+    counts = {}
+    real = SparseCollocation.linearise
+
+    def counting(self, orbit, c=None):
+        counts[self.settings.chord] = counts.get(self.settings.chord, 0) + 1
+        return real(self, orbit, c)
+
+    monkeypatch.setattr(SparseCollocation, "linearise", counting)
+    exact, _ = SparseSweep(chord=0.0, gmres_forcing=1e-11).bind(prob, sch).correct(guess, con, newton)
+    fast, lin = SparseSweep().bind(prob, sch).correct(guess, con, newton)
+    assert exact.converged and fast.converged
+    assert float(jnp.max(jnp.abs(fast.x.to_flat() - exact.x.to_flat()))) < 1e-9
+    assert counts[SparseSweep().chord] < counts[0.0]
+    assert float(jnp.max(jnp.abs(lin.orbit.to_flat() - fast.x.to_flat()))) == 0.0
+    np.testing.assert_allclose(np.asarray(fast.aux.to_flat()), np.asarray(exact.aux.to_flat()), atol=1e-8)
+
+
+def test_blocks_factorised_in_a_given_column_order_solve_exactly():
+    """Every interval block shares one pattern, so the sparse solver computes SuperLU's column order once and
+    factorises the other blocks in it (``_PermutedLU``): the solves with K and K^T are exact and the fill is that
+    of SuperLU's own ordering."""
+    import scipy.sparse as sps
+    import scipy.sparse.linalg as spla
+    from gfbjax.cont._sparse import _PermutedLU
+    rng = np.random.default_rng(2)
+    A = (sps.random(300, 300, density=0.02, random_state=3) + 3 * sps.eye(300)).tocsc()
+    own = spla.splu(A, permc_spec="COLAMD")
+    position = np.asarray(own.perm_c)
+    cols = np.empty_like(position)
+    cols[position] = np.arange(300)
+    lu = _PermutedLU(A, cols, position)
+    b, B = rng.standard_normal(300), rng.standard_normal((300, 4))
+    assert np.max(np.abs(A @ lu.solve(b) - b)) < 1e-12
+    assert np.max(np.abs(A @ lu.solve(B) - B)) < 1e-12
+    assert np.max(np.abs(A.T @ lu.solve(b, trans="T") - b)) < 1e-12
+    assert lu.lu.L.nnz + lu.lu.U.nnz == own.L.nnz + own.U.nnz

@@ -51,3 +51,21 @@ def test_bad_guard_settings_are_refused():
         EquilibriumSettings(max_angle=0.0)
     with pytest.raises(ValueError, match="event_refine"):
         EquilibriumSettings(event_refine=-1)
+
+
+def test_quadratic_predictor_moves_only_the_guess():
+    """On the circle with a constant step the corrected points lie on the same hyperplanes whatever the guess:
+    the parabola through the previous point (``PseudoArclength(quadratic=True)``, the default) gives the same
+    points as the tangent predictor, each on the circle, in fewer Newton iterations (its guess is off by
+    O(ds^3), the tangent's by ds^2 / 2)."""
+    from gfbjax.cont import PseudoArclength
+    out = {}
+    for q in (False, True):
+        st = EquilibriumSettings(ds=0.3, ds_max=0.3, grow=1.0, max_points=15, algorithm=PseudoArclength(quadratic=q))
+        out[q] = continue_equilibria(EquilibriumProblem(circle, 1), st, np.array([1.0]), 0.0)
+    lin, quad = out[False], out[True]
+    assert len(lin) == len(quad) == 15
+    np.testing.assert_allclose(quad.lam, lin.lam, atol=1e-10)
+    np.testing.assert_allclose(quad.states["x"], lin.states["x"], atol=1e-10)
+    np.testing.assert_allclose(quad.states["x"][:, 0] ** 2 + quad.lam ** 2, 1.0, atol=1e-10)
+    assert np.sum(quad.newton_iterations[2:]) < np.sum(lin.newton_iterations[2:])
