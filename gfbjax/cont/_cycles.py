@@ -129,9 +129,12 @@ def check_cycle_size(problem: CycleProblem, N: int, m: int, settings: CycleSetti
     floquet = _effective_floquet(problem, settings)
     from ._floquet import _Leading
     if isinstance(floquet, _Leading) and min(floquet.k, n - 2) <= problem.n_trivial:
-        raise ValueError(f"{type(floquet).__name__}(k={floquet.k}) computes min(k, n - 2) = {min(floquet.k, n - 2)} multipliers for "
-                         f"n = {n}, not more than the {problem.n_trivial} trivial one(s): stability could not be "
-                         "judged; use a larger k, or floquet=PeriodicQR() with the dense solver")
+        advice = ("use a larger k, or " if n - 2 > problem.n_trivial else
+                  f"n - 2 = {n - 2} caps it whatever k is: use ")
+        raise ValueError(f"{type(floquet).__name__}(k={floquet.k}) computes min(k, n - 2) = {min(floquet.k, n - 2)} "
+                         f"multipliers for n = {n}, not more than the {problem.n_trivial} trivial one(s): stability "
+                         f"could not be judged; {advice}floquet=PeriodicQR() with the dense solver "
+                         "(linear_solver=DenseCondensation())")
     solver = choose_solver(settings.linear_solver, problem)
     if isinstance(solver, SparseSweep):
         nnz = int(np.count_nonzero(np.asarray(problem.jac_sparsity, bool) | np.eye(n, dtype=bool)))

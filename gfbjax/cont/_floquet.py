@@ -306,6 +306,7 @@ class BlockKrylov(_Leading):
         super().__post_init__()
         from ._problem import check_range
         check_range("BlockKrylov block", self.block, 1, 10**4, integer=True)
+        check_range("BlockKrylov tol_inside", self.tol_inside, self.tol, 1.0, hi_open=True)
         check_range("BlockKrylov max_dim", self.max_dim, 2, 10**6, integer=True)
 
     def multipliers(self, lin, memo: dict) -> np.ndarray:
@@ -327,6 +328,11 @@ class BlockKrylov(_Leading):
         return mu
 
 
+#: Relative residual the two Ritz values after the cut must reach: only that they are eigenvalues, so that the cut
+#: falls between true ones, not their digits.
+_GUARD_TOL = 1e-3
+
+
 def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_inside: float, block: int,
                    max_dim: int,
                    start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
@@ -334,15 +340,22 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
     :class:`BlockKrylov`).  Returns (eigenvalues sorted by decreasing modulus, an orthonormal real basis (n, c) of
     their Ritz vectors for the next start), or None when ``max_dim`` columns did not converge them.
 
-    The count returned is k, doubled while the smallest has modulus >= ``inside``, plus one where the cut would
-    separate a complex pair from its conjugate."""
+    The count returned is k, doubled while the smallest has modulus >= ``inside``, and made closed under
+    conjugation (a pair is never cut from its conjugate).
+
+    A start basis converges at once to what it already holds, and an eigenvalue outside it (a multiplier that has
+    just grown past the others) shows first as a poor Ritz value of the random columns, which may sit below the
+    cut where nothing is checked.  So the start keeps at least four random columns, the space is grown by at least
+    three block products before anything is returned, and the two Ritz values after the cut must have converged
+    as well (to 1e-3): the returned set is then the leading one, not just a converged one."""
     b = max(1, min(block, n))
-    fill = np.random.default_rng(0).standard_normal((n, b))
-    if start is None or start.shape[0] != n:
-        V0 = fill
-    else:  # the previous point's Ritz basis, topped up with fixed pseudo-random columns to a whole block
-        V0 = np.concatenate([start, fill], axis=1)[:, :max(b, start.shape[1])]
+    warm = start is not None and start.shape[0] == n
+    # a whole block of fixed pseudo-random columns, or, after a warm start, enough to top it up (at least 4)
+    fill = np.random.default_rng(0).standard_normal((n, max(b - start.shape[1], 4) if warm else b))
+    V0 = np.concatenate([start, fill], axis=1) if warm else fill
     Q = _orthonormal(V0, None, drop=True)
+    min_dim = min(n, Q.shape[1] + 3 * b)
+    guard = 2
     Qs, Ws = [Q], []
     while True:
         Ws.append(np.asarray(matmat(Qs[-1]), float))
@@ -352,13 +365,18 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
         theta, Y = theta[order], Y[:, order]
         count = _wanted(theta, k, inside)
         dim = Qa.shape[1]
-        if count <= dim:
+        if dim >= n and count <= dim:  # the whole space: the Ritz values are the eigenvalues
             Yc = Y[:, :count]
-            res = np.linalg.norm(Wa @ Yc - (Qa @ Yc) * theta[:count], axis=0)
-            need = np.where(np.abs(theta[:count]) >= inside, tol, tol_inside) * np.abs(theta[:count])
-            if np.all(res <= need) or dim >= n:
-                return theta[:count], _orthonormal(np.concatenate([(Qa @ Yc).real, (Qa @ Yc).imag], axis=1),
-                                                   None, drop=True)
+            return theta[:count], _ritz_basis(Qa @ Yc)
+        checked = count + guard
+        if dim >= min_dim and checked <= dim:
+            Yc = Y[:, :checked]
+            res = np.linalg.norm(Wa @ Yc - (Qa @ Yc) * theta[:checked], axis=0)
+            mod = np.abs(theta[:checked])
+            need = np.where(mod >= inside, tol, tol_inside) * mod
+            need[count:] = _GUARD_TOL * mod[count:]
+            if np.all(res <= need):
+                return theta[:count], _ritz_basis(Qa @ Yc[:, :count])
         if dim >= max_dim:
             return None
         nxt = _orthonormal(Ws[-1][:, :max_dim - dim], Qa, drop=True)
@@ -370,11 +388,22 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
         Qs.append(nxt)
 
 
+def _ritz_basis(X: np.ndarray) -> np.ndarray:
+    """An orthonormal real basis of the span of complex Ritz vectors X (n, c)."""
+    return _orthonormal(np.concatenate([X.real, X.imag], axis=1), None, drop=True)
+
+
 def _wanted(theta: np.ndarray, k: int, inside: float) -> int:
+    """How many of the Ritz values theta (decreasing modulus) to return: k, doubled while the last is at or outside
+    ``inside``, then one more while the set is not closed under conjugation (a pair cut at the end)."""
     count = min(k, len(theta))
     while count < len(theta) and abs(theta[count - 1]) >= inside:
         count = min(2 * count, len(theta))
-    if count < len(theta) and theta[count - 1].imag != 0 and np.isclose(theta[count], np.conj(theta[count - 1])):
+    scale = max(float(np.max(np.abs(theta[:count]), initial=0.0)), 1e-300)
+    while count < len(theta):
+        im = theta[:count].imag
+        if np.sum(im > 1e-12 * scale) == np.sum(im < -1e-12 * scale):
+            break
         count += 1
     return count if abs(theta[count - 1]) < inside else len(theta) + 1  # all at or outside: grow the space
 

@@ -266,8 +266,9 @@ class SparseSweep(LinearSolver):
     the failure that halves the step: 20 restarts made the Brusselator branch 2.8x slower there);
     gmres_forcing: the loosest relative tolerance of a Newton step's GMRES solve, which is solved to
     max(gmres_rtol, min(gmres_forcing, residual)) (inexact Newton; tangents and other solves use gmres_rtol);
-    chord: a Newton step reuses the last factorisations while the residual is below ``chord`` times the residual
-    where they were made (0: a new factorisation at every step); the converged orbit always gets its own;
+    chord: a Newton step reuses the last factorisations while each step cuts the residual by at least this factor
+    (residual <= chord * previous residual; 0: a new factorisation at every step); the converged orbit always
+    gets its own;
     permc_spec: SuperLU column ordering."""
 
     name = "sparse"

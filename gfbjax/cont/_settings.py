@@ -40,6 +40,11 @@ class PseudoArclength:
     secant: bool = False
     quadratic: bool = True
 
+    def __post_init__(self) -> None:
+        for name in ("secant", "quadratic"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ValueError(f"PseudoArclength {name} must be True or False, got {getattr(self, name)!r}")
+
     def predict(self, space: Any, X: Any, X_prev: Any, tau: Any, ds: float, direction: int, dlam_max: float):
         """(prediction, constraint, ds) of the next step; ds is capped so that lam moves at most dlam_max."""
         d = tau

@@ -174,8 +174,8 @@ class SparseCollocation(BoundSolver):
         f, args = self.problem.f, self.problem.args
 
         chord = self.settings.chord if newton.verify_residual else 0.0
-        # the factorisations a chord step may reuse, the residual where they were made, and the last residual
-        made = {"lin": None, "rnorm": np.inf, "last": np.inf}
+        # the factorisations a chord step may reuse, the last residual, and the evaluations so far
+        made = {"lin": None, "last": np.inf, "calls": 0}
 
         def linearise(o, accepts):
             rc, rper, rs = (np.asarray(a) for a in _residual(f, args, o, con, self.scheme))
@@ -186,17 +186,21 @@ class SparseCollocation(BoundSolver):
                 lin = self.linearise(o, con)
                 return rnorm, col.Orbit(jnp.zeros_like(o.mesh), jnp.zeros_like(o.xm), jnp.zeros_like(o.xi),
                                         jnp.zeros_like(o.T), jnp.zeros_like(o.lam)), lin
-            # chord step: once the residual has fallen well below the one where the blocks were factorised, the
-            # old factorisations still give a step that converges fast (the Jacobian moved by about the
-            # correction so far); only the converged orbit needs its own (for the tangent and the multipliers)
+            # chord step: while the last step cut the residual by the factor ``chord`` or more, the old
+            # factorisations still give a step that converges fast (the Jacobian moved by about the correction
+            # so far); a slower step (a linear rate that would need many steps) gets new ones.  Only the
+            # converged orbit needs its own (for the tangent and the multipliers).
             lin, last = made["lin"], made["last"]
+            made["calls"] += 1
             # inexact Newton: the step's GMRES need only be as accurate as the residual it removes (forcing term
             # of Dembo, Eisenstat and Steihaug, proportional to the residual: the convergence stays quadratic);
             # a chord step converges only linearly, at the rate just seen, and a tenth of that rate is enough
             rtol = min(self.settings.gmres_forcing, rnorm)
-            if lin is None or not rnorm <= chord * made["rnorm"]:
+            # the last two steps of the iteration budget are full Newton steps: a slow solve from a poor guess
+            # must not run out of iterations because of a chord step that exact Newton would not have taken
+            if lin is None or not rnorm <= chord * last or made["calls"] >= newton.max_iter - 1:
                 lin = self.linearise(o, con)
-                made.update(lin=lin, rnorm=rnorm)
+                made["lin"] = lin
             else:
                 rtol = min(self.settings.gmres_forcing, max(rtol, 0.1 * rnorm / last))
             made["last"] = rnorm

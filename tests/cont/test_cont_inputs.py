@@ -42,7 +42,7 @@ def test_floquet_method_must_see_past_the_trivial_multiplier():
     with pytest.raises(ValueError, match="BlockKrylov"):
         continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W), jac_sparsity=pattern), st, _sl_start(st))
     st = CycleSettings(m=3, N=6, max_points=2, linear_solver=SparseSweep())  # n = 2: the default gets n - 2 = 0
-    with pytest.raises(ValueError, match="BlockKrylov"):
+    with pytest.raises(ValueError, match="BlockKrylov.*caps it whatever k is"):  # no advice to raise k
         continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W), jac_sparsity=pattern), st, _sl_start(st))
 
 
@@ -86,3 +86,20 @@ def test_linear_algebra_failure_ends_the_branch_and_keeps_the_points(monkeypatch
     br = continue_cycles(prob, st, _sl_start(st, n))
     assert br.outcome is Outcome.LINEAR_SOLVE_FAILED and "simulated" in br.message
     assert len(br) == 3
+
+
+def test_speed_settings_are_checked():
+    """Review cases: tol_inside and the predictor switches were accepted whatever their value."""
+    from gfbjax.cont import PseudoArclength
+    for bad in (-1.0, 0.0, float("nan"), 2.0):
+        with pytest.raises(ValueError, match="tol_inside"):
+            BlockKrylov(tol_inside=bad)
+    for bad in ("no", None, 1):
+        with pytest.raises(ValueError, match="quadratic"):
+            PseudoArclength(quadratic=bad)
+        with pytest.raises(ValueError, match="secant"):
+            PseudoArclength(secant=bad)
+    with pytest.raises(ValueError, match="chord"):
+        SparseSweep(chord=1.5)
+    with pytest.raises(ValueError, match="gmres_forcing"):
+        SparseSweep(gmres_forcing=0.0)

@@ -338,3 +338,64 @@ def test_blocks_factorised_in_a_given_column_order_solve_exactly():
     assert np.max(np.abs(A @ lu.solve(B) - B)) < 1e-12
     assert np.max(np.abs(A.T @ lu.solve(b, trans="T") - b)) < 1e-12
     assert lu.lu.L.nnz + lu.lu.U.nnz == own.L.nnz + own.U.nnz
+
+
+def test_krylov_warm_start_finds_a_multiplier_outside_its_basis():
+    """A multiplier that grows past all others with an eigenvector outside the previous point's Ritz basis (review
+    case): the warm start converges at once to what its basis holds, so without enough random directions the new
+    leading value 1.05 was missed while every returned value passed its residual test."""
+    from gfbjax.cont._floquet import krylov_leading
+    rng = np.random.default_rng(5)
+    n = 200
+    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    ev = np.concatenate([[1.0], np.linspace(0.95, 0.5, 11), np.full(n - 12, 0.01)])
+    kw = dict(k=12, inside=0.9, tol=1e-11, tol_inside=1e-6, block=16, max_dim=n)
+    _, basis = krylov_leading(lambda V: Q @ (ev[:, None] * (Q.T @ V)), n, **kw)
+    ev2 = ev.copy()
+    ev2[100] = 1.05
+    mu, _ = krylov_leading(lambda V: Q @ (ev2[:, None] * (Q.T @ V)), n, start=basis, **kw)
+    np.testing.assert_allclose(mu.real, np.sort(ev2)[::-1][:12], atol=1e-9)
+
+
+def test_krylov_returns_a_set_closed_under_conjugation_with_a_repeated_pair():
+    """Two equal pairs p, conj(p), p, conj(p): a cut after the first pair is already closed and must not take one
+    member of the second (review case: [1, p, conj(p), p] was returned)."""
+    from gfbjax.cont._floquet import _wanted, krylov_leading
+    p = 0.5 + 0.6j
+    assert _wanted(np.array([1, p, np.conj(p), p, np.conj(p), 0.1]), 3, 0.9) == 3
+    assert _wanted(np.array([1, p, np.conj(p), p, np.conj(p), 0.1]), 2, 0.9) == 3
+    rot = 0.8 * np.array([[np.cos(0.7), -np.sin(0.7)], [np.sin(0.7), np.cos(0.7)]])
+    n = 40
+    rng = np.random.default_rng(1)
+    B = np.diag(np.concatenate([[1.0, 0.99], np.zeros(4), 0.3 * rng.random(n - 6)]))
+    B[2:4, 2:4] = rot
+    B[4:6, 4:6] = rot
+    S = rng.standard_normal((n, n))
+    A = S @ B @ np.linalg.inv(S)
+    for k in (2, 3, 4, 5):
+        mu, _ = krylov_leading(lambda V: A @ V, n, k=k, inside=0.9, tol=1e-11, tol_inside=1e-6, block=4, max_dim=n)
+        assert abs(np.sum(mu).imag) < 1e-8, (k, mu)
+
+
+def test_chord_steps_cost_no_iteration_that_exact_newton_would_not_take():
+    """A slow correction from a poor guess (review case: ring K = 10, weak coupling, 30 % amplitude distortion and
+    1.1 T) that exact Newton finishes in the default 8 iterations: the last steps of the budget are full Newton
+    steps, so the default corrector finishes too, on the same orbit."""
+    k = 10
+    prob = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, 0.05]), jac_sparsity=ring_pattern(k))
+    sch = cont.Scheme(4)
+    r, phase = np.sqrt(LAM), 0.3 * np.sin(2 * np.pi * np.arange(k) / k)
+
+    def x_of_t(t):
+        th = 2 * np.pi * t[:, None] + phase[None, :]
+        return np.stack([1.3 * r * np.cos(th), 0.7 * r * np.sin(th)], axis=2).reshape(len(t), -1)
+
+    guess = col.orbit_from_function(x_of_t, 1.1 * 2 * np.pi / W, LAM, sch, col.uniform_mesh(20))
+    con = col.natural_constraint(guess, LAM)
+    newton = cont.CycleSettings().newton
+    assert newton.max_iter == 8
+    exact, _ = SparseSweep(chord=0.0, gmres_forcing=1e-11).bind(prob, sch).correct(guess, con, newton)
+    fast, _ = SparseSweep().bind(prob, sch).correct(guess, con, newton)
+    assert exact.converged and int(exact.iterations) >= 7  # a slow solve: the budget matters
+    assert fast.converged, fast.outcome
+    assert float(jnp.max(jnp.abs(fast.x.to_flat() - exact.x.to_flat()))) < 1e-9
