@@ -286,8 +286,9 @@ class BlockKrylov(_Leading):
     Krylov space of the monodromy operator, grown without restarts.
 
     The space is :math:`\mathrm{span}\{V_0, MV_0, M^2V_0, \dots\}` with a start block :math:`V_0` of ``block``
-    columns: the previous point's leading Ritz vectors (the dominant subspace moves little along a branch) filled
-    up with fixed pseudo-random columns (so that no direction is missed).  Each product is one block sweep of the
+    columns or more: the previous point's leading Ritz vectors (the dominant subspace moves little along a
+    branch) and at least four fixed pseudo-random columns (so that no direction is missed; see
+    :func:`krylov_leading` for the checks that keep a warm start from missing a newly leading multiplier).  Each product is one block sweep of the
     linearisation (``monodromy_matmat``), whose factorisations are read once per block instead of once per vector.
     Because every product :math:`MQ` is kept, each Ritz pair's residual :math:`\|MQy - \theta Qy\|` is computed
     exactly, not estimated; the space grows until it is at most ``tol`` :math:`|\theta|` for every returned
