@@ -59,7 +59,8 @@ def main() -> None:
     t_branch = time.perf_counter() - t0
 
     special = [{"type": s.type, "Omega_bar": float(s.lam), "rpm": gfbjax.reference_system().rpm(float(s.lam)),
-                "located": bool(s.located), "angle": None if s.angle is None else float(s.angle)}
+                "located": bool(s.located), "angle": None if s.angle is None else float(s.angle),
+                "Omega_bar_error": None if not np.isfinite(s.lam_error) else float(s.lam_error)}
                for s in branch.special]
     rec = {
         "system": "reference", "Nx": a.nx, "Nz": a.nz, "n": prob.n, "N": settings.N, "m": settings.m,
@@ -102,7 +103,9 @@ def main() -> None:
             ("branch after compilation [s]", rec["branch_s"]), ("per point [s]", rec["per_point_s"]),
             ("Newton iterations (all points)", rec["newton_iterations"]),
             ("max |mu_trivial - 1|", f"{rec['max_trivial_error']:.2e}")]
-    rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f} ({s['rpm']:.0f} rpm)") for s in special]
+    rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f}"
+              + ("" if s["Omega_bar_error"] is None else f" +- {s['Omega_bar_error']:.0e}") + f" ({s['rpm']:.0f} rpm)")
+             for s in special]
     if "dense_iteration_s" in rec:
         rows.append(("dense condensation, one Newton iteration [s]", rec["dense_iteration_s"]))
         est = rec["dense_iteration_s"] * (rec["newton_iterations"] + len(branch))

@@ -32,7 +32,7 @@ def _branch(P: int = 5, k: int = 2, n: int = 3, *, special: bool = True, states:
     sp, sp_states = [], []
     if special:
         sp = [SpecialPoint("NS", lam=0.17, index=2, spectrum=np.array([1j, -1j, 0.5]), located=True, residual=1e-10,
-                           period=37.0, angle=1.25, state=0),
+                           period=37.0, angle=1.25, state=0, lam_error=3e-5),
               SpecialPoint("LPC", lam=0.26, index=P, spectrum=np.array([1.0, 0.2, 0.1 + 0.1j]), located=False)]
         sp_states = [{"xm": np.ones((4, k))}]
     b = Branch.from_points("cycles", list(range(10, 10 + k)), pts, sp, sp_states, Outcome.REACHED_END,
@@ -70,6 +70,7 @@ def test_round_trip_keeps_meta_outcome_message_special(tmp_path):
     assert (ns.type, ns.index, ns.located, ns.angle, ns.state, ns.period) == ("NS", 2, True, 1.25, 0, 37.0)
     np.testing.assert_array_equal(ns.spectrum, b.special[0].spectrum)
     assert lpc.type == "LPC" and not lpc.located and math.isnan(lpc.residual) and lpc.index == len(b)
+    assert ns.lam_error == 3e-5 and math.isnan(lpc.lam_error)
     np.testing.assert_array_equal(back.special_states[0]["xm"], b.special_states[0]["xm"])
     np.testing.assert_array_equal(back.states["xm"], b.states["xm"])
     np.testing.assert_array_equal(back.states["mesh"], b.states["mesh"])
@@ -317,6 +318,7 @@ def test_to_xarray_dims_coords_attrs():
     assert ds["lam"].attrs["units"].startswith("Omega_bar") and ds["xmax"].attrs["units"] == "over clearance c"
     assert list(ds["special_type"].values) == ["NS", "LPC"]
     assert ds["special_angle"].values[0] == 1.25 and math.isnan(ds["special_angle"].values[1])
+    assert ds["special_lam_error"].values[0] == 3e-5 and math.isnan(ds["special_lam_error"].values[1])
     assert ds.attrs["format"] == "gfbjax.cont.Branch" and ds.attrs["outcome"] == "reached_end"
     assert ds.attrs["message"] == "reached lam_max" and ds.attrs["m"] == 4
     assert json.loads(ds.attrs["meta_system"]) == {"name": "tiny", "values": [1.0, 2.5], "flag": True}

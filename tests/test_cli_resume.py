@@ -149,3 +149,17 @@ def test_special_points_in_contact_or_unresolved_are_flagged():
     row = {"type": "NS", "Omega_bar": 0.24, "rpm": 9000.0, "multiplier_moduli": [1.0, 1.0], "located": True,
            "flags": _row_flags(br, 2)}
     assert "FLAGGED: film contact" in format_table([row])
+
+
+def test_special_point_table_gives_the_estimated_error():
+    """The table's "+-" column is SpecialPoint.lam_error (``Omega_bar_error`` in cycles.json); "?" where none was
+    estimated."""
+    from gfbjax.cli.commands.cycles import format_table
+
+    rows = [{"type": "NS", "Omega_bar": 0.3768, "rpm": 13326.0, "multiplier_moduli": [1.0, 1.0], "located": True,
+             "Omega_bar_error": 2.1e-5, "flags": []},
+            {"type": "PD", "Omega_bar": 0.5, "rpm": 17700.0, "multiplier_moduli": [1.0], "located": False,
+             "Omega_bar_error": None, "flags": []}]
+    lines = format_table(rows).splitlines()
+    assert "+-" in lines[1]
+    assert "2e-05" in lines[2] and lines[3].split()[2] == "?"

@@ -337,6 +337,8 @@ class Branch:
                 "special_index": (("special",), np.asarray([int(s.index) for s in sp], np.int64)),
                 "special_located": (("special",), np.asarray([bool(s.located) for s in sp], bool)),
                 "special_residual": (("special",), np.asarray([num(s.residual) for s in sp])),
+                "special_lam_error": (("special",), np.asarray([num(s.lam_error) for s in sp]),
+                                      {**lam_attrs, "long_name": "estimated error of special_lam (SpecialPoint)"}),
                 "special_period": (("special",), np.asarray([num(s.period) for s in sp])),
                 "special_angle": (("special",), np.asarray([num(s.angle) for s in sp])),
                 "special_omega": (("special",), np.asarray([num(s.omega) for s in sp])),

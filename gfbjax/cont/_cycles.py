@@ -282,9 +282,10 @@ class CycleCurve(Curve):
 
     def crossing_kinds(self, an, count):
         """The ``count`` non-trivial multipliers nearest the unit circle, named: a complex pair an NS (two
-        crossings), a real negative one a PD, a real positive one a BPC."""
-        return name_crossings(nontrivial(an["spectrum"], self.problem.n_trivial), count,
-                              lambda z: abs(abs(z) - 1.0), "NS", lambda z: "PD" if z.real < 0 else "BPC")
+        crossings, with its own angle), a real negative one a PD, a real positive one a BPC."""
+        named = name_crossings(nontrivial(an["spectrum"], self.problem.n_trivial), count,
+                               lambda z: abs(abs(z) - 1.0), "NS", lambda z: "PD" if z.real < 0 else "BPC")
+        return [(k, {"angle": abs(float(np.angle(z)))} if k == "NS" else {}) for k, z in named]
 
     def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
@@ -334,6 +335,19 @@ class CycleCurve(Curve):
                 return X, tau, X_prev, tests  # at a fold: the new mesh would hide its crossing; adapt later
             tests = {**tests, "LPC": float(t.lam)}
         return sol.x, t, None if X_prev is None else remesh(X_prev, self.scheme, mesh), tests
+
+    def other_discretisations(self, X, tau):
+        # the mesh's boundaries moved a third and two thirds of the way through their intervals, the time origin
+        # with them: the same N, m and local density, so no solver is recompiled and all three meshes are about
+        # equally good, but no boundary or node stays where it was.  Two, because one can by chance sit as well
+        # placed to a kink as the first (an underestimate by up to 7x in tests/cont/test_cont_mesh.py).
+        mesh = np.asarray(X.mesh, float)
+        out = []
+        for frac in (1.0 / 3.0, 2.0 / 3.0):
+            moved = mesh[:-1] + frac * np.diff(mesh)
+            new = np.concatenate([moved - moved[0], [1.0]])
+            out.append((remesh(X, self.scheme, new, shift=moved[0]), remesh(tau, self.scheme, new, shift=moved[0])))
+        return out
 
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,

@@ -123,16 +123,24 @@ class Curve(abc.ABC):
         of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
         False: X is the first point past the event, not the event itself."""
 
+    def other_discretisations(self, X: Any, tau: Any) -> list[tuple[Any, Any]]:
+        """X and its tangent carried to other discretisations of the same size, on which a special point at X is
+        located once more to estimate its discretisation error (``SpecialPoint.lam_error``); empty when the
+        curve has no discretisation (equilibria: the ODE itself is solved)."""
+        return []
+
     def crossings(self, before: np.ndarray, after: np.ndarray) -> int:
         """How many members of the spectrum crossed the stability boundary between two points whose test data
         hold ``CRITICAL`` = ``before`` and ``after`` (the members nearest the boundary), by matching; 0 by
         default."""
         return 0
 
-    def crossing_kinds(self, analysis: dict[str, Any], count: int) -> list[str]:
-        """Names for ``count`` crossings of the stability boundary that no test function's sign change accounts
-        for (two events closer together than the shortest step), read off the eigenvalues (multipliers) nearest
-        the boundary in ``analysis``; empty by default (then they are not reported)."""
+    def crossing_kinds(self, analysis: dict[str, Any], count: int) -> list[tuple[str, dict[str, Any]]]:
+        """(name, data) for ``count`` crossings of the stability boundary that no test function's sign change
+        accounts for (two events closer together than the shortest step), read off the eigenvalues (multipliers)
+        nearest the boundary in ``analysis``; ``data`` is the crossing member's own (``omega``, ``angle``), which
+        :meth:`special` would give as the same for every crossing.  Empty by default (then they are not
+        reported)."""
         return []
 
     def null_tangent(self, X: Any) -> Any:
@@ -149,7 +157,8 @@ class Curve(abc.ABC):
 
 
 def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_hi: float, *,
-           tol: float = 1e-9, s_tol: float = 1e-10, max_iter: int = 30) -> tuple[float, Any, float, bool]:
+           tol: float = 1e-9, s_tol: float = 1e-10, max_iter: int = 30,
+           info: dict | None = None) -> tuple[float, Any, float, bool]:
     """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
 
     ``g(s)`` returns (value, payload) and may return (nan, None) on failure.  Returns (s, payload, value,
@@ -158,11 +167,18 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
     |g| below 1e-6 of its end values (a continuous root); not located when g jumps across a closed bracket, when
     g_lo and g_hi do not bracket a zero (no evaluation then) or when the iteration budget runs out.  An end value already within
     ``tol`` is returned after one evaluation there (the point on the event) when a value just inside the end
-    (1e-6 s_hi) shows no sign change in the interior.
+    (1e-6 s_hi) shows no sign change in the interior.  ``info``, when given, receives ``"bracket"``: the last
+    (a, b) known to hold the sign change (what an unlocated result is worth).
     """
     a, b, ga, gb = 0.0, float(s_hi), float(g_lo), float(g_hi)
+    info = {} if info is None else info
+
+    def done(*result):
+        info["bracket"] = (min(a, b), max(a, b))
+        return result
+
     if not (np.sign(ga) * np.sign(gb) <= 0):
-        return b, None, gb, False
+        return done(b, None, gb, False)
     # relative to the end values where they are small: a test function that is itself small across the step (a
     # product of factors of which only one vanishes) would meet an absolute tolerance far from its zero
     tol = tol * min(1.0, max(abs(ga), abs(gb)))
@@ -176,7 +192,7 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
         if np.isfinite(gi) and np.sign(gi) == np.sign(ga):
             gs, payload = g(b)
             if np.isfinite(gs):
-                return b, payload, gs, abs(gs) <= tol
+                return done(b, payload, gs, abs(gs) <= tol)
         elif np.isfinite(gi) and np.sign(gi) * np.sign(ga) < 0:
             b, gb = b - inset, gi
     if abs(ga) <= tol:
@@ -184,7 +200,7 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
         if np.isfinite(gi) and np.sign(gi) == np.sign(gb):
             gs, payload = g(a)
             if np.isfinite(gs):
-                return a, payload, gs, abs(gs) <= tol
+                return done(a, payload, gs, abs(gs) <= tol)
         elif np.isfinite(gi) and np.sign(gi) * np.sign(gb) < 0:
             a, ga = a + inset, gi
     side = 0
@@ -201,15 +217,15 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
             s = 0.5 * (a + b)
             gs, payload = g(s)
             if not np.isfinite(gs):
-                return best[0], best[1], best[2], False
+                return done(best[0], best[1], best[2], False)
         best = (s, payload, gs)
         if abs(gs) <= tol:
-            return s, payload, gs, True
+            return done(s, payload, gs, True)
         if abs(b - a) <= s_tol * max(1.0, abs(s_hi)):
             # The bracket closed.  A continuous test function is then tiny next to its values at the ends; one that
             # jumps across the bracket (a critical eigenvalue swapping, a discontinuous model) is not: bracketed,
             # not located.
-            return s, payload, gs, abs(gs) <= 1e-6 * max(abs(g_lo), abs(g_hi))
+            return done(s, payload, gs, abs(gs) <= 1e-6 * max(abs(g_lo), abs(g_hi)))
         if np.sign(gs) == np.sign(gb):
             b, gb = s, gs
             if side == -1:
@@ -220,7 +236,7 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
             if side == +1:
                 gb *= 0.5
             side = +1
-    return best[0], best[1], best[2], False
+    return done(best[0], best[1], best[2], False)
 
 
 class _Run:
@@ -464,9 +480,9 @@ def _unresolved(run: _Run, missing: int, Xn: Any, an_n: dict) -> list:
     named from the members nearest the boundary (:meth:`Curve.crossing_kinds`)."""
     c = run.curve
     out = []
-    for kind in c.crossing_kinds(an_n, missing):
+    for kind, own in c.crossing_kinds(an_n, missing):
         extra = c.special(kind, Xn, an_n, located=False)
-        out.append(_Found(kind, Xn, an_n, False, math.nan, {} if extra is None else extra))
+        out.append(_Found(kind, Xn, an_n, False, math.nan, {**({} if extra is None else extra), **own}))
     return out
 
 
@@ -523,6 +539,9 @@ class _Found:
     s: float = math.nan
     tangent_lam: float = math.nan
     singular: bool = False  # not located because the corrections next to its zero failed (see _bracket)
+    lam_error: float = math.nan  # SpecialPoint.lam_error (the localisation's share until _insert)
+    tangent: Any = None  # at the point (localised points)
+    slope: float = math.nan  # of the test function in the arclength over the step
     end: str | None = None  # "left"/"right": the event is the step's first/last point itself (no new row)
 
 
@@ -555,16 +574,84 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
             tl = float(c.lam(sol.aux))
             return c.tests(a, tl)[kind], (sol, a, tl)
 
-        sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol)
+        info: dict = {}
+        sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol, info=info)
         if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
             sol, an, tl = payload
             found = _Found(kind, sol.x, an, bool(located), float(val), {}, int(sol.iterations), sv, tl,
                            end="left" if sv == 0.0 else "right" if sv == ds else None)
+            # the test function's slope in the arclength, from the step's ends: enough for an error estimate
+            found.slope = (tests_n[kind] - tests[kind]) / ds
+            found.tangent = sol.aux
+            if located:
+                found.lam_error = abs(tl * float(val) / found.slope) if found.slope else math.nan
+            else:  # bracketed: where in the bracket the zero lies is unknown.  Its width in the arclength bounds
+                # its width in lam (lam is a unit-weight component of the curve's norm); |tl| times it would not,
+                # where lam turns (the side branch of a pitchfork at its branch point)
+                lo, hi = info["bracket"]
+                found.lam_error = hi - lo
     # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
     # jump to another branch makes the test function change sign far from zero, with or without failures)
     found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
                       and abs(found.residual) <= 1e-3 * max(abs(tests[kind]), abs(tests_n[kind])))
     return found
+
+
+def _relocated_shift(run: _Run, f: _Found, X2: Any, t2: Any, max_iter: int = 16) -> float:
+    """How far in lam the zero of the test function ``f.kind`` at the localised point ``f.point`` moves when the
+    curve is computed on another discretisation of the same size (``X2``, ``t2``: the point and its tangent
+    carried there, :meth:`Curve.other_discretisations`); NaN where that relocation fails.
+
+    Why other discretisations and not the per-orbit mesh estimate: the location of a special point depends on the
+    multipliers (or the tangent), whose discretisation error can be far larger than the orbit's.  On the GFB
+    reference branch the orbit's estimate is ~5e-7 while the NS moves by ~1e-4 between meshes; at a kink of the
+    vector field a fold moves by 1e-4 with a trivial multiplier exact to 1e-14.  Discretisations of equal quality
+    disagree by about as much as each is in error, which is what is reported.
+
+    The zero on the other discretisation, in the arclength s along the carried tangent (each point corrected on
+    the hyperplane at distance s from the carried point): secant steps from the step's slope until the sign
+    changes, then the regula falsi of :func:`locate` on that bracket, to a precision (1e-3 of the test function)
+    that suits an error estimate.  The secant alone would wander where the discrete curve has corners (a mesh
+    node crossing a kink makes the tangent, hence the fold test, jump).  A step that reduces the test function
+    tenfold ends the search at once: the secant's zero is then accurate to far better than the shift itself."""
+    c, kind, slope = run.curve, f.kind, f.slope
+    budget = [max_iter]
+
+    def g(sv: float) -> tuple[float, Any]:
+        budget[0] -= 1
+        pred = c.add(X2, c.scale(t2, sv))
+        s2, lin = c.correct(pred, c.palc_constraint(X2, t2, sv, pred))
+        if not s2.converged:
+            return math.nan, None
+        return c.tests(c.analyse(s2.x, lin, s2.aux), float(c.lam(s2.aux)))[kind], c.lam(s2.x)
+
+    s0, (g0, lam0) = 0.0, g(0.0)
+    if not (np.isfinite(g0) and slope and np.isfinite(slope)):
+        return math.nan
+    if g0 == 0.0:
+        return abs(lam0 - c.lam(f.point))
+    s1 = -g0 / slope
+    while budget[0] > 0:
+        g1, lam1 = g(s1)
+        if not np.isfinite(g1):
+            return math.nan
+        if abs(g1) <= 0.1 * abs(g0):
+            # the last step took the test function down tenfold: it is straight here, and the zero is the
+            # secant's, good to about a hundredth of the step (the usual case on a smooth problem: two corrections)
+            lam_z = lam1 - g1 * (lam1 - lam0) / (g1 - g0) if g1 != g0 else lam1
+            return abs(lam_z - c.lam(f.point))
+        if np.sign(g1) != np.sign(g0):
+            lo, hi = (s0, g0), (s1, g1)
+            if s1 < s0:
+                lo, hi = hi, lo
+            _, lam_z, _, _ = locate(lambda u: g(lo[0] + u), hi[0] - lo[0], lo[1], hi[1], tol=1e-3, s_tol=1e-4,
+                                    max_iter=max(budget[0], 1))
+            return math.nan if lam_z is None else abs(lam_z - c.lam(f.point))
+        # same sign: a secant step, at most four times as long as the last one (a flat stretch would fling it)
+        step = -g1 * (s1 - s0) / (g1 - g0) if g1 != g0 else 2.0 * (s1 - s0)
+        step = float(np.clip(step, -4.0 * abs(s1 - s0), 4.0 * abs(s1 - s0)))
+        s0, g0, lam0, s1 = s1, g1, lam1, s1 + step
+    return math.nan
 
 
 def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tests_n: dict, Xn: Any,
@@ -590,7 +677,15 @@ def _insert(run: _Run, f: _Found) -> None:
     elif np.isfinite(f.residual) and f.end is None:
         run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
         row = len(run.points) - 1
+    if f.tangent is not None and not f.singular:  # (next to a branch point the relocations would fail alike)
+        # A jump of the test function (a mesh node crossing a kink of the vector field) closes the bracket to
+        # 1e-10 while the exact zero lies 1e-4 away: the discretisation's share is added, located or not.
+        shifts = [_relocated_shift(run, f, X2, t2) for X2, t2 in c.other_discretisations(f.point, f.tangent)]
+        if shifts:  # NaN (no estimate) only when every relocation failed
+            finite = [v for v in shifts if np.isfinite(v)]
+            f.lam_error += max(finite) if finite else math.nan
     run.special_states.append(c.state(f.point))
     run.special.append(SpecialPoint(type=f.kind, lam=float(c.lam(f.point)), index=row,
                                     spectrum=np.asarray(f.analysis["spectrum"]), located=f.located,
-                                    residual=f.residual, state=len(run.special_states) - 1, **f.extra))
+                                    residual=f.residual, lam_error=f.lam_error, state=len(run.special_states) - 1,
+                                    **f.extra))

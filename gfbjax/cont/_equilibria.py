@@ -168,9 +168,10 @@ class EquilibriumCurve(Curve):
         return out
 
     def crossing_kinds(self, an, count):
-        """The ``count`` eigenvalues nearest the imaginary axis, named: a complex pair a HOPF (two crossings),
-        a real one a BP."""
-        return _name_crossings(an["spectrum"], count, lambda z: abs(z.real), "HOPF", lambda z: "BP")
+        """The ``count`` eigenvalues nearest the imaginary axis, named: a complex pair a HOPF (two crossings, with
+        its own omega), a real one a BP."""
+        return [(k, {"omega": abs(z.imag)} if k == "HOPF" else {})
+                for k, z in _name_crossings(an["spectrum"], count, lambda z: abs(z.real), "HOPF", lambda z: "BP")]
 
     def crossings(self, before, after):
         """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""

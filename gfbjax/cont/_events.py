@@ -164,9 +164,10 @@ def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance)
     return count
 
 
-def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real) -> list[str]:
-    """Event names for the ``count`` members of ``spectrum`` nearest the stability boundary (``distance(z)``
-    from it): ``pair`` for a complex pair (counted twice), ``real(z)`` for a real value."""
+def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real) -> list[tuple[str, complex]]:
+    """(event name, member) for the ``count`` members of ``spectrum`` nearest the stability boundary
+    (``distance(z)`` from it): ``pair`` for a complex pair (counted twice; its upper member), ``real(z)`` for a
+    real value."""
     z = np.asarray(spectrum, complex)
     names, left = [], int(count)
     for k in np.argsort([distance(v) for v in z], kind="stable"):
@@ -175,10 +176,10 @@ def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real) 
         v = z[k]
         if abs(v.imag) > IMAG_TOL * max(1.0, abs(v)):
             if v.imag > 0:  # each pair once, by its upper member
-                names.append(pair)
+                names.append((pair, complex(v)))
                 left -= 2
         else:
-            names.append(real(v))
+            names.append((real(v), complex(v)))
             left -= 1
     return names
 

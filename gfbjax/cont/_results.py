@@ -94,9 +94,17 @@ class SpecialPoint:
     located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.
     A bracketed BP deserves suspicion: the branch-point test also flips when the corrector jumps from one branch
     to a nearby one (an imperfect bifurcation with a large step), and then the points past it lie on the other
-    branch; rerun with a smaller ``ds_max``.  angle: NS, the argument of
-    the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the critical eigenvalue (per unit
-    time of the problem).  state: index into ``Branch.special_states`` (the full state at the point).
+    branch; rerun with a smaller ``ds_max``.
+    lam_error: an estimate of the error of ``lam``, in its units (NaN: none).  The test function vanishes to
+    ``locate_tol`` on *this* discretisation; the zero of the exact problem lies about ``lam_error`` away.  For a
+    located cycle point: how far the zero moves when it is located again on a second mesh of the same size (every
+    interior boundary moved by half an interval), plus the residual's share; for a located equilibrium only the
+    residual's share (there is no discretisation).  For a point bracketed but not located: the final bracket's
+    width in lam, plus the other meshes' share for cycles, except at a branch point whose corrections failed (they
+    would fail on the other meshes too).
+    angle: NS, the argument of the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the
+    critical eigenvalue (per unit time of the problem).  state: index into ``Branch.special_states`` (the full
+    state at the point).
     normal_form: normal-form data where computed (e.g. ``{"l1": first Lyapunov coefficient}``).
     """
 
@@ -107,6 +115,7 @@ class SpecialPoint:
     located: bool
     residual: float = math.nan
     period: float = math.nan
+    lam_error: float = math.nan
     angle: float | None = None
     omega: float | None = None
     state: int | None = None
@@ -134,7 +143,7 @@ class SpecialPoint:
     def from_json(cls, d: dict[str, Any]) -> "SpecialPoint":
         d = dict(d)
         d["spectrum"] = np.array([complex(a, b) for a, b in d.get("spectrum") or []], complex)
-        for key in ("residual", "period"):
+        for key in ("residual", "period", "lam_error"):
             if d.get(key) is None:
                 d[key] = math.nan
         known = {f.name for f in fields(cls)}

@@ -6,6 +6,7 @@ optimised foil schedules of :func:`gfbjax.design.schedule.optimized_continuation
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -86,7 +87,10 @@ def _mark_special(ax, s: Any, ys: Sequence[float], label: str | None = None, ms:
 
 
 def _special_text(s: Any) -> str:
-    return f"{s.type}{'' if s.located else '?'} {s.lam:.4f}"
+    # the estimated error where it reaches the printed digits: a location is no more certain than that
+    err = getattr(s, "lam_error", math.nan)
+    tail = f" +- {err:.0e}" if np.isfinite(err) and err >= 5e-5 else ""
+    return f"{s.type}{'' if s.located else '?'} {s.lam:.4f}{tail}"
 
 
 def _special_rows(branch: Any) -> list[tuple[dict, int | None]]:

@@ -124,6 +124,8 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
         d: dict[str, Any] = {
             "type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.period,
             "located": bool(s.located), "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
+            # the estimated error of Omega_bar: a second and third mesh's zeros (SpecialPoint.lam_error)
+            "Omega_bar_error": None if math.isnan(s.lam_error) else s.lam_error,
             "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
             "critical_multipliers": [[float(z.real), float(z.imag)] for z in crit[:2]],
         }
@@ -161,14 +163,15 @@ def _row_flags(branch: Any, i: int) -> list[str]:
 def format_table(rows: list[dict[str, Any]]) -> str:
     if not rows:
         return "  special points    none"
-    lines = ["  special points", f"    {'type':<5} {'Omega_bar':>10} {'rpm':>9}  {'|mu| (largest non-trivial)':<30} "
-             f"{'NS angle':>12}  located"]
+    lines = ["  special points", f"    {'type':<5} {'Omega_bar':>10} {'+-':>8} {'rpm':>9}  "
+             f"{'|mu| (largest non-trivial)':<30} {'NS angle':>12}  located"]
     for d in rows:
         mods = ", ".join(f"{v:.4f}" for v in d["multiplier_moduli"][:3])
         ang = f"{d['ns_angle_rad']:.4f} rad" if "ns_angle_rad" in d else ""
         flags = f"  FLAGGED: {', '.join(d['flags'])}" if d.get("flags") else ""
-        lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {d['rpm']:>9.0f}  {mods:<30} {ang:>12}  "
-                     f"{'yes' if d['located'] else 'no'}{flags}")
+        err = d.get("Omega_bar_error")
+        lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {'?' if err is None else f'{err:.0e}':>8} "
+                     f"{d['rpm']:>9.0f}  {mods:<30} {ang:>12}  {'yes' if d['located'] else 'no'}{flags}")
     return "\n".join(lines)
 
 

@@ -90,7 +90,8 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
     for s in branch.special:
         lam = float(s.lam)
         d: dict[str, Any] = {"type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "located": bool(s.located),
-                             "residual": None if math.isnan(s.residual) else s.residual, "index": s.index}
+                             "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
+                             "Omega_bar_error": None if math.isnan(s.lam_error) else s.lam_error}
         ev = np.asarray(s.spectrum, complex)
         d["max_real_part"] = float(ev.real.max()) if ev.size else None
         if s.type == "HOPF" and s.omega is not None:
@@ -155,7 +156,9 @@ def run(args: argparse.Namespace) -> int:
         if "omega_per_tau" in d:
             extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
                      f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
-        where = (f"located, test function {d['residual']:.1e}" if d["located"] else
+        where = (f"located, test function {d['residual']:.1e}" + (
+                 f", Omega_bar +- {d['Omega_bar_error']:.0e}" if d.get("Omega_bar_error") is not None else "")
+                 if d["located"] else
                  f"NOT located: the test function jumps there (by {d['residual']:.1e})" if d["residual"] is not None
                  else "NOT located: values at the first point past it")
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
