@@ -124,9 +124,9 @@ class Curve(abc.ABC):
         False: X is the first point past the event, not the event itself."""
 
     def other_discretisations(self, X: Any, tau: Any) -> list[tuple[Any, Any]]:
-        """X and its tangent carried to other discretisations of the same size, on which a special point at X is
-        located once more to estimate its discretisation error (``SpecialPoint.lam_error``); empty when the
-        curve has no discretisation (equilibria: the ODE itself is solved)."""
+        """X and its tangent carried to finer discretisations, on which a special point at X is located once more
+        to estimate its discretisation error (``SpecialPoint.lam_error``); empty when the curve has no
+        discretisation (equilibria: the ODE itself is solved)."""
         return []
 
     def crossings(self, before: np.ndarray, after: np.ndarray) -> int:
@@ -135,10 +135,12 @@ class Curve(abc.ABC):
         default."""
         return 0
 
-    def crossing_kinds(self, analysis: dict[str, Any], count: int) -> list[tuple[str, dict[str, Any]]]:
+    def crossing_kinds(self, analysis: dict[str, Any], count: int,
+                       before: np.ndarray | None = None) -> list[tuple[str, dict[str, Any]]]:
         """(name, data) for ``count`` crossings of the stability boundary that no test function's sign change
         accounts for (two events closer together than the shortest step), read off the eigenvalues (multipliers)
-        nearest the boundary in ``analysis``; ``data`` is the crossing member's own (``omega``, ``angle``), which
+        in ``analysis`` that crossed since the step's first point (``before``: its ``CRITICAL`` test data), then
+        those nearest the boundary; ``data`` is the crossing member's own (``omega``, ``angle``), which
         :meth:`special` would give as the same for every crossing.  Empty by default (then they are not
         reported)."""
         return []
@@ -420,7 +422,8 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             ds, refined = 0.5 * ds, refined + 1
             continue
         if missing and s.detect:  # refined as far as allowed: report, unlocated, what crossed
-            found += [f for f in _unresolved(run, missing, Xn, an_n) if f.kind in s.detect]
+            found += [f for f in _unresolved(run, missing, Xn, an_n, tests.get("CRITICAL"), ds)
+                      if f.kind in s.detect]
         # in the order of the branch: rows stay monotone in s, and an event at the step's end keeps its row index
         for f in sorted(found, key=lambda f: f.s if np.isfinite(f.s) else math.inf):
             _insert(run, f)
@@ -472,17 +475,18 @@ def _crossings(tests: dict, tests_n: dict) -> int:
     return int(max(0.0, abs(tests_n["UNSTABLE"] - tests["UNSTABLE"]) - slack))
 
 
-def _unresolved(run: _Run, missing: int, Xn: Any, an_n: dict) -> list:
+def _unresolved(run: _Run, missing: int, Xn: Any, an_n: dict, before: np.ndarray | None, ds: float) -> list:
     """Unlocated special points (at the point after the step) for ``missing`` crossings that
     :func:`_unexplained` still finds after the last refinement: events closer than ``ds_min`` or
     ``ds / 2^event_refine`` (a double Hopf, two pairs crossing in opposite directions) that no test function's
     sign change accounts for.  Reported, not located, rather than left to a silent flip of the stability flag;
-    named from the members nearest the boundary (:meth:`Curve.crossing_kinds`)."""
+    named from the members that crossed (:meth:`Curve.crossing_kinds`); the step (``ds``) bounds where."""
     c = run.curve
     out = []
-    for kind, own in c.crossing_kinds(an_n, missing):
+    for kind, own in c.crossing_kinds(an_n, missing, before):
         extra = c.special(kind, Xn, an_n, located=False)
-        out.append(_Found(kind, Xn, an_n, False, math.nan, {**({} if extra is None else extra), **own}))
+        out.append(_Found(kind, Xn, an_n, False, math.nan, {**({} if extra is None else extra), **own},
+                          lam_error=ds))
     return out
 
 
@@ -542,6 +546,7 @@ class _Found:
     lam_error: float = math.nan  # SpecialPoint.lam_error (the localisation's share until _insert)
     tangent: Any = None  # at the point (localised points)
     slope: float = math.nan  # of the test function in the arclength over the step
+    scale: float = math.nan  # the larger test value at the step's ends
     end: str | None = None  # "left"/"right": the event is the step's first/last point itself (no new row)
 
 
@@ -561,15 +566,24 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
              an_n: dict) -> _Found:
     """Drive the test function ``kind`` to zero between X (left) and Xn (regula falsi in the arclength)."""
     c, s = run.curve, run.s
-    found = _Found(kind, Xn, an_n, False, math.nan, {})
+    found = _Found(kind, Xn, an_n, False, math.nan, {}, lam_error=ds)  # not localised: somewhere in the step
     failed = []
     if s.locate and tau is not None:
+        # Every evaluation lies on the hyperplane at distance sv from X along tau; its guess comes from the
+        # nearest point already on the branch, along that point's own tangent.  Next to a branch point, where the
+        # corrections' basin shrinks with the distance to it, the step's linear predictor from X would start
+        # outside it long before the bracket closes.
+        near = [(0.0, X, tau)]
+
         def g(sv):
-            pred = c.add(X, c.scale(tau, sv))
+            s0, P, t = min(near, key=lambda e: abs(e[0] - sv))
+            along = c.inner(t, tau)
+            pred = c.add(P, c.scale(t, (sv - s0) / along if along > 0.5 else sv - s0))
             sol, lin = c.correct(pred, c.palc_constraint(X, tau, sv, pred))
             if not sol.converged:
                 failed.append(sv)
                 return float("nan"), None
+            near.append((sv, sol.x, sol.aux))
             a = c.analyse(sol.x, lin, sol.aux)
             tl = float(c.lam(sol.aux))
             return c.tests(a, tl)[kind], (sol, a, tl)
@@ -582,6 +596,7 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
                            end="left" if sv == 0.0 else "right" if sv == ds else None)
             # the test function's slope in the arclength, from the step's ends: enough for an error estimate
             found.slope = (tests_n[kind] - tests[kind]) / ds
+            found.scale = max(abs(tests[kind]), abs(tests_n[kind]))
             found.tangent = sol.aux
             if located:
                 found.lam_error = abs(tl * float(val) / found.slope) if found.slope else math.nan
@@ -594,26 +609,31 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
     # jump to another branch makes the test function change sign far from zero, with or without failures)
     found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
                       and abs(found.residual) <= 1e-3 * max(abs(tests[kind]), abs(tests_n[kind])))
+    if found.singular and found.slope:
+        # There the test function is noise of size |residual| about its zero, resolved only to |residual / slope|
+        # in s however tight the bracket: a multiplier through +1 next to the trivial one is computed to about the
+        # square root of the rounding (3.6e-7 at the Brusselator's branch points, test_cont_brusselator.py).
+        found.lam_error = max(found.lam_error, abs(found.residual / found.slope))
     return found
 
 
 def _relocated_shift(run: _Run, f: _Found, X2: Any, t2: Any, max_iter: int = 16) -> float:
     """How far in lam the zero of the test function ``f.kind`` at the localised point ``f.point`` moves when the
-    curve is computed on another discretisation of the same size (``X2``, ``t2``: the point and its tangent
-    carried there, :meth:`Curve.other_discretisations`); NaN where that relocation fails.
+    curve is computed on a finer discretisation (``X2``, ``t2``: the point and its tangent carried there,
+    :meth:`Curve.other_discretisations`); NaN where that relocation fails.
 
-    Why other discretisations and not the per-orbit mesh estimate: the location of a special point depends on the
-    multipliers (or the tangent), whose discretisation error can be far larger than the orbit's.  On the GFB
-    reference branch the orbit's estimate is ~5e-7 while the NS moves by ~1e-4 between meshes; at a kink of the
-    vector field a fold moves by 1e-4 with a trivial multiplier exact to 1e-14.  Discretisations of equal quality
-    disagree by about as much as each is in error, which is what is reported.
+    Why not the per-orbit mesh estimate: the location of a special point depends on the multipliers (or the
+    tangent), whose discretisation error can be far larger than the orbit's.  On the GFB reference branch the
+    orbit's estimate is ~5e-7 while the NS moves by ~1e-4 between meshes; at a kink of the vector field a fold
+    moves by 1e-4 with a trivial multiplier exact to 1e-14.  The move to a mesh twice as fine is about the error of
+    this one (all of it when the finer one is exact, half of it for a first-order method).
 
-    The zero on the other discretisation, in the arclength s along the carried tangent (each point corrected on
+    The zero on the finer discretisation, in the arclength s along the carried tangent (each point corrected on
     the hyperplane at distance s from the carried point): secant steps from the step's slope until the sign
     changes, then the regula falsi of :func:`locate` on that bracket, to a precision (1e-3 of the test function)
     that suits an error estimate.  The secant alone would wander where the discrete curve has corners (a mesh
     node crossing a kink makes the tangent, hence the fold test, jump).  A step that reduces the test function
-    tenfold ends the search at once: the secant's zero is then accurate to far better than the shift itself."""
+    tenfold ends the search at once: the secant's zero is then accurate to far better than the move itself."""
     c, kind, slope = run.curve, f.kind, f.slope
     budget = [max_iter]
 
@@ -628,7 +648,9 @@ def _relocated_shift(run: _Run, f: _Found, X2: Any, t2: Any, max_iter: int = 16)
     s0, (g0, lam0) = 0.0, g(0.0)
     if not (np.isfinite(g0) and slope and np.isfinite(slope)):
         return math.nan
-    if g0 == 0.0:
+    if abs(g0) <= run.s.locate_tol * min(1.0, f.scale):
+        # already a zero there (to the tolerance the point was located with); a double zero (two events at one
+        # point) would offer the secant no sign change and no decrease
         return abs(lam0 - c.lam(f.point))
     s1 = -g0 / slope
     while budget[0] > 0:
@@ -668,6 +690,22 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
                              f"{where}: beyond it the solutions leave the model's validity (Monitor.stop)")
 
 
+def _own_member(run: _Run, f: _Found) -> None:
+    """A second event of the same type at the same point (a step landing exactly on a double Hopf or double NS
+    point: each crossing pair's zero is found at that end) takes the next crossing member's data (omega, angle):
+    :meth:`Curve.special` reads the one pair nearest the boundary, which the first event already carries."""
+    same = [p for p in run.special if p.type == f.kind and p.lam == run.curve.lam(f.point)]
+    keys = [k for k in ("omega", "angle") if f.extra.get(k) is not None]
+    if not same or not keys:
+        return
+    used = [[getattr(p, k) for k in keys] for p in same]
+    for kind, own in run.curve.crossing_kinds(f.analysis, 2 * (len(same) + 1)):
+        vals = [own.get(k) for k in keys]
+        if kind == f.kind and None not in vals and not any(np.allclose(vals, u, rtol=1e-6, atol=1e-9) for u in used):
+            f.extra.update(own)
+            return
+
+
 def _insert(run: _Run, f: _Found) -> None:
     """Insert a special point (a bracketed one also as a new row of the branch)."""
     c = run.curve
@@ -677,10 +715,18 @@ def _insert(run: _Run, f: _Found) -> None:
     elif np.isfinite(f.residual) and f.end is None:
         run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
         row = len(run.points) - 1
+    _own_member(run, f)
     if f.tangent is not None and not f.singular:  # (next to a branch point the relocations would fail alike)
         # A jump of the test function (a mesh node crossing a kink of the vector field) closes the bracket to
         # 1e-10 while the exact zero lies 1e-4 away: the discretisation's share is added, located or not.
+        # the estimate must leave the branch as it would be without it: the curve's memo (the Floquet method's warm
+        # start) is restored afterwards, so that a resumed branch, which does not repeat it, agrees to rounding
+        memo = getattr(c, "memo", None)
+        saved = None if memo is None else dict(memo)
         shifts = [_relocated_shift(run, f, X2, t2) for X2, t2 in c.other_discretisations(f.point, f.tangent)]
+        if memo is not None:
+            memo.clear()
+            memo.update(saved)
         if shifts:  # NaN (no estimate) only when every relocation failed
             finite = [v for v in shifts if np.isfinite(v)]
             f.lam_error += max(finite) if finite else math.nan

@@ -35,8 +35,8 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
-from ._events import (ON_BOUNDARY, critical, matched_crossings, name_crossings as _name_crossings, sign_changes,
-                      signed_min)
+from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
+                      sign_changes, signed_min)
 from ._newton import NewtonSettings, solve as newton_solve
 from ._problem import EquilibriumProblem
 from ._settings import EquilibriumSettings
@@ -167,11 +167,15 @@ class EquilibriumCurve(Curve):
             out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
         return out
 
-    def crossing_kinds(self, an, count):
-        """The ``count`` eigenvalues nearest the imaginary axis, named: a complex pair a HOPF (two crossings, with
-        its own omega), a real one a BP."""
+    def crossing_kinds(self, an, count, before=None):
+        """``count`` crossings named from the eigenvalues that crossed the imaginary axis since ``before``
+        (matched), then those nearest it: a complex pair a HOPF (two crossings, with its own omega), a real one a
+        BP."""
+        ev = an["spectrum"]
+        crossed = [] if before is None else crossed_members(before, ev, lambda z: z.real > 0.0,
+                                                            lambda z: np.abs(z.real) / np.maximum(1.0, np.abs(z)))
         return [(k, {"omega": abs(z.imag)} if k == "HOPF" else {})
-                for k, z in _name_crossings(an["spectrum"], count, lambda z: abs(z.real), "HOPF", lambda z: "BP")]
+                for k, z in _name_crossings(ev, count, lambda z: abs(z.real), "HOPF", lambda z: "BP", crossed)]
 
     def crossings(self, before, after):
         """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""

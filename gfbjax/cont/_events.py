@@ -139,7 +139,13 @@ def critical(values: np.ndarray, distance) -> np.ndarray:
 
 
 def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance) -> int:
-    """Members of the spectrum that changed side between two points, followed by nearest neighbours.  A member
+    """How many members of the spectrum changed side between two points (:func:`crossed_members`)."""
+    return len(crossed_members(before, after, unstable, distance))
+
+
+def crossed_members(before: np.ndarray, after: np.ndarray, unstable, distance) -> list[int]:
+    """Indices into ``after`` of the members of the spectrum that changed side between two points, followed by
+    nearest neighbours.  A member
     counts when it and its nearest neighbour at the other point are each other's nearest, nearer than half the
     distance to any other candidate (a confident match), lie on different sides (``unstable(z)``, boolean array),
     and neither lies on the boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a point exactly on an event, whose
@@ -149,28 +155,32 @@ def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance)
     that did not happen."""
     a, b = np.asarray(before, complex), np.asarray(after, complex)
     if a.size == 0 or b.size == 0:
-        return 0
+        return []
     d = np.abs(a[:, None] - b[None, :])
     ab, ba = np.argmin(d, axis=1), np.argmin(d, axis=0)
     second_a = np.sort(d, axis=1)[:, 1] if b.size > 1 else np.full(a.size, np.inf)
     second_b = np.sort(d, axis=0)[1, :] if a.size > 1 else np.full(b.size, np.inf)
     ua, ub = unstable(a), unstable(b)
     on_a, on_b = distance(a) <= ON_BOUNDARY, distance(b) <= ON_BOUNDARY
-    count = 0
+    out = []
     for i, j in enumerate(ab):
         confident = ba[j] == i and d[i, j] < 0.5 * min(second_a[i], second_b[j])
         if confident and ua[i] != ub[j] and not (on_a[i] or on_b[j]):
-            count += 1
-    return count
+            out.append(int(j))
+    return out
 
 
-def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real) -> list[tuple[str, complex]]:
-    """(event name, member) for the ``count`` members of ``spectrum`` nearest the stability boundary
-    (``distance(z)`` from it): ``pair`` for a complex pair (counted twice; its upper member), ``real(z)`` for a
-    real value."""
+def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real,
+                   crossed: list[int] = ()) -> list[tuple[str, complex]]:
+    """(event name, member) for ``count`` crossings: the members of ``spectrum`` known to have crossed first
+    (``crossed``, indices from :func:`crossed_members`), then those nearest the stability boundary
+    (``distance(z)`` from it), which a member that did not cross can be; ``pair`` for a complex pair (counted
+    twice; its upper member), ``real(z)`` for a real value."""
     z = np.asarray(spectrum, complex)
     names, left = [], int(count)
-    for k in np.argsort([distance(v) for v in z], kind="stable"):
+    crossed = set(crossed)
+    order = sorted(range(len(z)), key=lambda k: (k not in crossed, distance(z[k])))
+    for k in order:
         if left <= 0:
             break
         v = z[k]

@@ -97,11 +97,12 @@ class SpecialPoint:
     branch; rerun with a smaller ``ds_max``.
     lam_error: an estimate of the error of ``lam``, in its units (NaN: none).  The test function vanishes to
     ``locate_tol`` on *this* discretisation; the zero of the exact problem lies about ``lam_error`` away.  For a
-    located cycle point: how far the zero moves when it is located again on a second mesh of the same size (every
-    interior boundary moved by half an interval), plus the residual's share; for a located equilibrium only the
-    residual's share (there is no discretisation).  For a point bracketed but not located: the final bracket's
-    width in lam, plus the other meshes' share for cycles, except at a branch point whose corrections failed (they
-    would fail on the other meshes too).
+    located cycle point: how far the zero moves when it is located again on the mesh with every interval halved,
+    plus the residual's share; for a located equilibrium only the residual's share (there is no discretisation).
+    For a point bracketed but not located: the final bracket's width in the arclength (which bounds it in lam),
+    plus the halved mesh's share for cycles, except at a branch point whose corrections failed (they would fail
+    on the finer mesh too; there the test function's noise, |residual / slope|, counts instead where larger).
+    Not localised (``locate`` off, every correction failed, or two crossings no step could separate): the step.
     angle: NS, the argument of the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the
     critical eigenvalue (per unit time of the problem).  state: index into ``Branch.special_states`` (the full
     state at the point).

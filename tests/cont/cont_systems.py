@@ -82,11 +82,15 @@ def half_turn_field(x, lam, p):
     On the cycle (u, v) = (cos wt, sin wt), z = 0, T = 2 pi / w.  In the frame turning at half the oscillator's
     speed the z-system is constant, D = gamma I + delta J + mu diag(1, -1), so the Floquet multipliers are, in
     closed form, 1 (trivial), exp(-2T) and -exp((gamma +- sqrt(mu^2 - delta^2)) T): two negative reals for
-    mu > delta, a complex pair of modulus exp(gamma T) and angle pi - sqrt(delta^2 - mu^2) T for mu < delta."""
+    mu > delta, a complex pair of modulus exp(gamma T) and angle pi - sqrt(delta^2 - mu^2) T for mu < delta.
+
+    An optional seventh parameter c adds c u I to the z-system: it commutes with the rest and integrates to zero
+    over a period, so the multipliers keep their closed form, but a coarse collocation mesh no longer reproduces
+    them exactly (a known discretisation error in the location of the PD and NS)."""
     w, g0, dg, d, m0, dm = p[0], p[1], p[2], p[3], p[4], p[5]
-    g = g0 + lam * dg
-    m = m0 + lam * dm
     u, v, z1, z2 = x[0], x[1], x[2], x[3]
+    g = g0 + lam * dg + (p[6] * u if p.shape[0] > 6 else 0.0)
+    m = m0 + lam * dm
     r2 = u * u + v * v
     rot = 0.5 * w + d
     dz1 = (g + m * u) * z1 + (m * v - rot) * z2
@@ -96,7 +100,7 @@ def half_turn_field(x, lam, p):
 
 def half_turn_multipliers(p, lam):
     """The closed-form non-trivial multipliers of ``half_turn_field`` at lam (see there), T = 2 pi / w."""
-    w, g0, dg, d, m0, dm = (float(v) for v in p)
+    w, g0, dg, d, m0, dm = (float(v) for v in p[:6])
     T = 2 * np.pi / w
     g, m = g0 + lam * dg, m0 + lam * dm
     s = np.sqrt(complex(m * m - d * d))

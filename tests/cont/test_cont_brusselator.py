@@ -166,6 +166,7 @@ def test_cycle_branch_passes_its_branch_points_and_finds_every_torus():
             assert around.min() - 1e-5 <= L_auto <= around.max() + 1e-5, (L_auto, around)
             # the reported error (the bracket's width where the corrections failed) covers AUTO's value
             assert abs(s.lam - L_auto) <= s.lam_error + 1e-5, (s.lam, s.lam_error, L_auto)
+            print("BPCW", solver.name, s.lam, s.lam_error, s.residual, s.located, L_auto)
         ns[solver.name] = [s for s in br.special if s.type == "NS"]
         for s in ns[solver.name]:
             assert s.located

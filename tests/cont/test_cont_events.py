@@ -55,7 +55,7 @@ def test_neimark_sacker_is_located_with_its_angle():
     assert len(ns) == 1 and ns[0].located, br.special
     assert abs(ns[0].lam) < 1e-8 and abs(ns[0].residual) < 1e-8
     assert abs(ns[0].angle - (np.pi - np.sqrt(0.08))) < 1e-7
-    # a smooth orbit: the NS hardly moves on two other meshes (SpecialPoint.lam_error)
+    # a smooth orbit: the NS hardly moves on the halved mesh (SpecialPoint.lam_error)
     assert 0.0 <= ns[0].lam_error < 1e-8
     assert [s.type for s in br.special] == ["NS"]
     assert br.stable[0] and not br.stable[-1]
@@ -168,15 +168,16 @@ def test_branch_point_on_the_trivial_branch():
 
 def test_branch_point_on_the_side_branch_is_no_fold():
     """Along x = sqrt(-p) from p = -1 the curve p = -x^2 turns at (0, 0), which is the branch point: reported as
-    BP, not as a fold; the branch goes on along x = -sqrt(-p).  (Near the crossing the localisation's corrections
-    can land on x = 0, so the BP is allowed to be bracketed rather than located; its place is checked.)"""
+    BP, not as a fold; the branch goes on along x = -sqrt(-p).  Located: each localisation step starts from the
+    nearest point already on the branch, along its tangent.  (Before, every guess came from the step's first
+    point along its tangent, the corrections failed next to the branch point, and it was only bracketed, to a
+    width of 5.6e-7.)"""
     br = continue_equilibria(EquilibriumProblem(_pitchfork, 1), EquilibriumSettings(ds=0.1, ds_max=0.1,
                              max_points=40, lam_min=-1.0, lam_max=1.0), [1.0], -1.0)
     types = [s.type for s in br.special]
     assert types == ["BP"], br.special
     assert abs(br.special[0].lam) < 1e-4
-    # located or only bracketed, the reported error covers the true one (a bracket: its width)
-    assert abs(br.special[0].lam) <= br.special[0].lam_error < 1e-4
+    assert br.special[0].located and abs(br.special[0].lam) < 1e-12 and br.special[0].lam_error < 1e-12
     x = br.states["x"][:, 0]
     np.testing.assert_allclose(x ** 2, -br.lam, atol=1e-9)
     assert x[0] > 0 and x[-1] < 0
@@ -202,7 +203,7 @@ def test_branch_point_of_cycles_is_reported():
     assert [s.type for s in br.special] == ["BPC"], br.special
     bpc = br.special[0]
     assert bpc.located and abs(bpc.lam) < 1e-8
-    assert abs(bpc.lam) <= bpc.lam_error < 1e-8  # the two other meshes see the error of this one
+    assert abs(bpc.lam) <= bpc.lam_error < 1e-8  # the halved mesh sees the error of this one
     assert np.all(br.stable[br.lam < -1e-9]) and not np.any(br.stable[br.lam > 1e-9])
 
 

@@ -156,11 +156,11 @@ def run(args: argparse.Namespace) -> int:
         if "omega_per_tau" in d:
             extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
                      f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
-        where = (f"located, test function {d['residual']:.1e}" + (
-                 f", Omega_bar +- {d['Omega_bar_error']:.0e}" if d.get("Omega_bar_error") is not None else "")
-                 if d["located"] else
+        where = (f"located, test function {d['residual']:.1e}" if d["located"] else
                  f"NOT located: the test function jumps there (by {d['residual']:.1e})" if d["residual"] is not None
                  else "NOT located: values at the first point past it")
+        if d.get("Omega_bar_error") is not None:
+            where += f"; Omega_bar +- {d['Omega_bar_error']:.0e}"
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
     print("\n".join(lines), flush=True)
 
