@@ -265,6 +265,31 @@ def test_points_landing_exactly_on_hopf_points_report_each_once():
     np.testing.assert_allclose([h.omega for h in hs], [1.0, 1.7], rtol=1e-12)
 
 
+@pytest.mark.parametrize("gap", [0.0, 1e-3])
+def test_a_step_landing_on_the_first_of_two_close_hopf_points_reports_both(gap):
+    """Steps of exactly 0.25 land on lam = 1.0, where the first pair sits on the axis, and the second crosses at
+    1 + gap.  The Hopf test keeps its sign over both steps around 1.0 (two factors change sign), so only the
+    unstable count sees the four crossings; the pair on the axis at the step's first point had been discounted as
+    if an event had been reported there.  Before: nothing reported for gap = 0, one HOPF (omega 1.7) for
+    gap = 1e-3 (review of this issue).  Now both, each with its own frequency, and the reported error covers
+    each true location."""
+    br = continue_equilibria(EquilibriumProblem(close_hopf_pairs, 4, jnp.asarray(gap)),
+                             EquilibriumSettings(ds=0.25, ds_max=0.25, lam_max=1.5), np.zeros(4), 0.0)
+    assert np.any(br.lam == 1.0)  # the grid is aligned as intended
+    hs = sorted(br.special_of("HOPF"), key=lambda h: h.omega)
+    assert [round(h.omega, 6) for h in hs] == [1.0, 1.7], br.special
+    for h, exact in zip(hs, (1.0, 1.0 + gap)):
+        assert abs(h.lam - exact) <= h.lam_error + 1e-12, (h.lam, h.lam_error, exact)
+
+
+def test_a_step_landing_on_the_bound_to_rounding_records_it_once():
+    """Steps of 0.2 from 0 reach 2.0 to rounding (1.9999999999999998): one last point on the bound, not that one
+    and the bound again (review of this issue)."""
+    br = continue_equilibria(EquilibriumProblem(opposite_hopf_pairs, 4, jnp.asarray(0.0)),
+                             EquilibriumSettings(ds=0.2, ds_max=0.2, lam_max=2.0), np.zeros(4), 0.0)
+    assert br.lam[-1] == 2.0 and np.all(np.diff(br.lam) > 1e-9), br.lam
+
+
 def opposite_hopf_pairs(x, lam, gap):
     """A pair leaving the right half plane at lam = 1, (1 - lam) +- i, and one entering it at lam = 1 + gap,
     (lam - 1 - gap) +- 1.7 i (Hopf normal forms, the first with its time reversed in the real part)."""
