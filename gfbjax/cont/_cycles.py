@@ -341,6 +341,15 @@ class CycleCurve(Curve):
             tests = {**tests, "LPC": float(t.lam)}
         return sol.x, t, None if X_prev is None else remesh(X_prev, self.scheme, mesh), tests
 
+    def border_solve(self, X, lin):
+        rng = np.random.default_rng(1)  # the same b at every point of a branch (same shapes)
+        try:
+            w = lin.solve(rng.standard_normal((X.N, self.scheme.m, X.n)), rng.standard_normal(X.n),
+                          rng.standard_normal(2))
+        except LinearSolveError:
+            return None
+        return np.asarray(w.to_flat())
+
     def other_discretisations(self, X, tau):
         # Every interval halved.  Not another mesh of the same N: near an equidistributed mesh (the optimum) any
         # such mesh changes the error only to second order, and a uniform mesh moved by part of an interval is

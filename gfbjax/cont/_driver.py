@@ -123,6 +123,12 @@ class Curve(abc.ABC):
         of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
         False: X is the first point past the event, not the event itself."""
 
+    def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
+        """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
+        when the curve does not provide it or the solve fails.  Used to place branch points across the gap where
+        corrections fail (:func:`_across_the_gap`)."""
+        return None
+
     def other_discretisations(self, X: Any, tau: Any) -> list[tuple[Any, Any]]:
         """X and its tangent carried to finer discretisations, on which a special point at X is located once more
         to estimate its discretisation error (``SpecialPoint.lam_error``); empty when the curve has no
@@ -554,6 +560,7 @@ class _Found:
     tangent_lam: float = math.nan
     singular: bool = False  # not located because the corrections next to its zero failed (see _bracket)
     lam_error: float = math.nan  # SpecialPoint.lam_error (the localisation's share until _insert)
+    lam: float | None = None  # where it differs from the point's (a branch point placed across its gap)
     tangent: Any = None  # at the point (localised points)
     slope: float = math.nan  # of the test function in the arclength over the step
     scale: float = math.nan  # the larger test value at the step's ends
@@ -584,16 +591,27 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
         # corrections' basin shrinks with the distance to it, the step's linear predictor from X would start
         # outside it long before the bracket closes.
         near = [(0.0, X, tau)]
+        solved: dict[float, tuple] = {}  # sv -> (solution, linearisation) of the converged evaluations
 
-        def g(sv):
+        def solve_at(sv):
+            if sv in solved:
+                return solved[sv]
             s0, P, t = min(near, key=lambda e: abs(e[0] - sv))
             along = c.inner(t, tau)
             pred = c.add(P, c.scale(t, (sv - s0) / along if along > 0.5 else sv - s0))
             sol, lin = c.correct(pred, c.palc_constraint(X, tau, sv, pred))
             if not sol.converged:
                 failed.append(sv)
-                return float("nan"), None
+                return None
             near.append((sv, sol.x, sol.aux))
+            solved[sv] = (sol, lin)
+            return solved[sv]
+
+        def g(sv):
+            got = solve_at(sv)
+            if got is None:
+                return float("nan"), None
+            sol, lin = got
             a = c.analyse(sol.x, lin, sol.aux)
             tl = float(c.lam(sol.aux))
             return c.tests(a, tl)[kind], (sol, a, tl)
@@ -624,7 +642,86 @@ def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tes
         # in s however tight the bracket: a multiplier through +1 next to the trivial one is computed to about the
         # square root of the rounding (3.6e-7 at the Brusselator's branch points, test_cont_brusselator.py).
         found.lam_error = max(found.lam_error, abs(found.residual / found.slope))
+        across = _across_the_gap(run, solve_at, found.s, ds)
+        if across is not None and across[1] < found.lam_error:
+            found.lam, found.lam_error = across
     return found
+
+
+def _across_the_gap(run: _Run, solve_at: Callable, center: float, ds: float) -> tuple[float, float] | None:
+    """(lam, error) of a branch point whose corrections fail next to it, from a regular test function
+    interpolated across the gap; None where the curve has none or it does not apply.
+
+    The test function that detected it is read off the spectrum (a multiplier through +1 beside the trivial one:
+    noise of ~sqrt(eps)).  Here the branch point is where the augmented Jacobian A (the curve's equations and its
+    continuation row) is singular, a property of A alone: with b fixed and c the unit vector along A^{-1} b next
+    to it (at ``center``, the noisy test's zero, at arclength ``center`` in a step of ``ds``), h = -1 / (c . A^{-1}
+    b) passes through zero linearly there (A^{-1} b, dominated by the null vector, turns round through infinity),
+    and is computed to rounding wherever a correction converges (:meth:`Curve.border_solve`).  Far from it the
+    sign of c . A^{-1} b says nothing, so a bracket is sought at distances doubling from ``center``; then the
+    regula falsi on h tightens it as far as corrections converge (to ~1e-5 in s on the Brusselator: they fail
+    within a few 1e-6 of the branch point), and the zero of the line through its ends is the estimate; its error, the largest distance to the zero of a parabola through
+    both ends and an evaluation beyond either."""
+    c = run.curve
+    values: dict[float, tuple[float, float]] = {}  # sv -> (h, lam)
+    cvec = []
+
+    def h(sv):
+        if sv in values:
+            return values[sv][0], values[sv]
+        got = solve_at(sv)
+        w = None if got is None else c.border_solve(got[0].x, got[1])
+        if w is None or not np.all(np.isfinite(w)):
+            return float("nan"), None
+        if not cvec:
+            cvec.append(w / np.linalg.norm(w))
+        d = float(np.dot(cvec[0], w))
+        if d == 0.0:
+            return float("nan"), None
+        values[sv] = (-1.0 / d, c.lam(got[0].x))
+        return values[sv][0], values[sv]
+
+    if not np.isfinite(h(center)[0]):
+        return None
+    delta = 1e-6 * ds
+    while True:
+        lo, hi = max(center - delta, 0.0), min(center + delta, ds)
+        h_lo, h_hi = h(lo)[0], h(hi)[0]
+        if np.isfinite(h_lo) and np.isfinite(h_hi) and np.sign(h_lo) != np.sign(h_hi):
+            break
+        if (lo == 0.0 and hi == ds) or delta > 0.25 * ds:
+            return None
+        delta *= 4.0
+    info: dict = {}
+    sv, payload, val, located = locate(lambda u: h(lo + u), hi - lo, h_lo, h_hi, tol=1e-12, s_tol=1e-12,
+                                       info=info)
+    if located and payload is not None:
+        return payload[1], 0.0
+    a, b = (lo + u for u in info["bracket"])
+    if a not in values or b not in values:
+        return None
+    (ha, la), (hb, lb) = values[a], values[b]
+    lam_line = la + (lb - la) * ha / (ha - hb)
+    # The error: the zero of the parabola through the bracket's ends and an evaluation beyond either end (one more
+    # correction each, far enough from the branch point to converge), against the line's.
+    w = b - a
+    for extra in (a - w, b + w):
+        if 0.0 <= extra <= ds and extra not in values:
+            h(extra)
+    worst = 0.0
+    for extra in (a - w, b + w):
+        if extra not in values:
+            return lam_line, abs(lb - la)
+        s3 = np.array([a, b, extra]) - a
+        h3 = np.array([ha, hb, values[extra][0]])
+        l3 = np.array([la, lb, values[extra][1]])
+        roots = np.roots(np.polyfit(s3, h3, 2))
+        roots = roots[np.isreal(roots)].real
+        roots = roots[(roots >= 0.0) & (roots <= w)]
+        if roots.size != 1:
+            return lam_line, abs(lb - la)
+        worst = max(worst, abs(float(np.polyval(np.polyfit(s3, l3, 2), roots[0])) - lam_line))
+    return lam_line, worst
 
 
 def _relocated_shift(run: _Run, f: _Found, X2: Any, t2: Any, max_iter: int = 16) -> float:
@@ -741,7 +838,7 @@ def _insert(run: _Run, f: _Found) -> None:
             finite = [v for v in shifts if np.isfinite(v)]
             f.lam_error += max(finite) if finite else math.nan
     run.special_states.append(c.state(f.point))
-    run.special.append(SpecialPoint(type=f.kind, lam=float(c.lam(f.point)), index=row,
-                                    spectrum=np.asarray(f.analysis["spectrum"]), located=f.located,
+    lam = float(c.lam(f.point) if f.lam is None else f.lam)
+    run.special.append(SpecialPoint(type=f.kind, lam=lam, index=row, spectrum=np.asarray(f.analysis["spectrum"]), located=f.located,
                                     residual=f.residual, lam_error=f.lam_error, state=len(run.special_states) - 1,
                                     **f.extra))

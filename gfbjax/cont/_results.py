@@ -100,8 +100,11 @@ class SpecialPoint:
     located cycle point: how far the zero moves when it is located again on the mesh with every interval halved,
     plus the residual's share; for a located equilibrium only the residual's share (there is no discretisation).
     For a point bracketed but not located: the final bracket's width in the arclength (which bounds it in lam),
-    plus the halved mesh's share for cycles, except at a branch point whose corrections failed (they would fail
-    on the finer mesh too; there the test function's noise, |residual / slope|, counts instead where larger).
+    plus the halved mesh's share for cycles.  A branch point whose corrections failed next to it is placed where a
+    regular bordered test function, interpolated across that gap, vanishes (where the curve's linear solver can
+    do that: the dense one), and its error is that interpolation's; otherwise the bracket's width, widened to the
+    noise of the multiplier test (|residual / slope|).  For those the discretisation's share is not estimated:
+    a relocation next to a branch point would fail the same way.
     Not localised (``locate`` off, every correction failed, or two crossings no step could separate): the step.
     angle: NS, the argument of the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the
     critical eigenvalue (per unit time of the problem).  state: index into ``Branch.special_states`` (the full
