@@ -660,8 +660,8 @@ def _across_the_gap(run: _Run, solve_at: Callable, center: float, ds: float) -> 
     and is computed to rounding wherever a correction converges (:meth:`Curve.border_solve`).  Far from it the
     sign of c . A^{-1} b says nothing, so a bracket is sought at distances doubling from ``center``; then the
     regula falsi on h tightens it as far as corrections converge (to ~1e-5 in s on the Brusselator: they fail
-    within a few 1e-6 of the branch point), and the zero of the line through its ends is the estimate; its error, the largest distance to the zero of a parabola through
-    both ends and an evaluation beyond either."""
+    within a few 1e-6 of the branch point), and the zero of the line through its ends is the estimate; its error,
+    the largest distance to the zero of a parabola through both ends and an evaluation beyond either."""
     c = run.curve
     values: dict[float, tuple[float, float]] = {}  # sv -> (h, lam)
     cvec = []
@@ -839,6 +839,6 @@ def _insert(run: _Run, f: _Found) -> None:
             f.lam_error += max(finite) if finite else math.nan
     run.special_states.append(c.state(f.point))
     lam = float(c.lam(f.point) if f.lam is None else f.lam)
-    run.special.append(SpecialPoint(type=f.kind, lam=lam, index=row, spectrum=np.asarray(f.analysis["spectrum"]), located=f.located,
-                                    residual=f.residual, lam_error=f.lam_error, state=len(run.special_states) - 1,
-                                    **f.extra))
+    run.special.append(SpecialPoint(type=f.kind, lam=lam, index=row, spectrum=np.asarray(f.analysis["spectrum"]),
+                                    located=f.located, residual=f.residual, lam_error=f.lam_error,
+                                    state=len(run.special_states) - 1, **f.extra))

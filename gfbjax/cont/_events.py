@@ -145,14 +145,13 @@ def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance)
 
 def crossed_members(before: np.ndarray, after: np.ndarray, unstable, distance) -> list[int]:
     """Indices into ``after`` of the members of the spectrum that changed side between two points, followed by
-    nearest neighbours.  A member
-    counts when it and its nearest neighbour at the other point are each other's nearest, nearer than half the
-    distance to any other candidate (a confident match), lie on different sides (``unstable(z)``, boolean array),
-    and neither lies on the boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a point exactly on an event, whose
-    crossing belongs to the step its test value's side gives).  Catches what the unstable count cannot: a pair
-    leaving the stable side while another enters in the same step (the count and every test function's sign are
-    then unchanged).  Members without a confident match are not counted: a wrong match would report a crossing
-    that did not happen."""
+    nearest neighbours. A member counts when it and its nearest neighbour at the other point are each other's
+    nearest, nearer than half the distance to any other candidate (a confident match), lie on different sides
+    (``unstable(z)``, boolean array), and neither lies on the boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a
+    point exactly on an event, whose crossing belongs to the step its test value's side gives). Catches what the
+    unstable count cannot: a pair leaving the stable side while another enters in the same step (the count and every
+    test function's sign are then unchanged). Members without a confident match are not counted: a wrong match would
+    report a crossing that did not happen."""
     a, b = np.asarray(before, complex), np.asarray(after, complex)
     if a.size == 0 or b.size == 0:
         return []
@@ -178,8 +177,13 @@ def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real,
     twice; its upper member), ``real(z)`` for a real value."""
     z = np.asarray(spectrum, complex)
     names, left = [], int(count)
-    crossed = set(crossed)
-    order = sorted(range(len(z)), key=lambda k: (k not in crossed, distance(z[k])))
+    cz = z[list(crossed)]
+
+    def did_cross(k):  # closed under conjugation: matching may list either member of a pair
+        tol = 1e-12 * max(1.0, abs(z[k]))
+        return cz.size > 0 and min(np.min(np.abs(cz - z[k])), np.min(np.abs(cz - np.conj(z[k])))) <= tol
+
+    order = sorted(range(len(z)), key=lambda k: (not did_cross(k), distance(z[k])))
     for k in order:
         if left <= 0:
             break

@@ -404,3 +404,13 @@ def test_cycle_tests_ignore_which_small_multipliers_are_computed():
             signs[k].add(np.sign(t[k]))
         assert t["UNSTABLE"] == 4  # 1.2 +- 0.8i, 1.1, -1.3
     assert all(len(v) == 1 for v in signs.values()), signs
+
+
+def test_crossing_names_follow_the_members_that_crossed():
+    """A pair that crossed is named first even when the match listed only its lower member, and a pair nearer the
+    boundary that did not cross is not named (review of this issue)."""
+    from gfbjax.cont._events import name_crossings
+
+    z = np.array([-1e-4 + 3j, -1e-4 - 3j, 0.01 + 1j, 0.01 - 1j])
+    got = name_crossings(z, 2, lambda v: abs(v.real), "HOPF", lambda v: "BP", crossed=[3])
+    assert got == [("HOPF", 0.01 + 1j)]
