@@ -162,4 +162,4 @@ def test_special_point_table_gives_the_estimated_error():
              "Omega_bar_error": None, "flags": []}]
     lines = format_table(rows).splitlines()
     assert "+-" in lines[1]
-    assert "2e-05" in lines[2] and lines[3].split()[2] == "?"
+    assert "2.1e-05" in lines[2] and lines[3].split()[2] == "?"

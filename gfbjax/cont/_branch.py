@@ -272,8 +272,8 @@ class Branch:
         (``multipliers`` split into ``multipliers_real`` and ``multipliers_imag``, because netCDF has no
         complex type), each with ``attrs["units"]`` from :attr:`units`; the special points as ``special_type``,
         ``special_lam``, ``special_lam_error``, ``special_index``, ``special_located``, ``special_residual``,
-        ``special_period``, ``special_angle``, ``special_omega`` (NaN where not defined), ``flagged`` (see :attr:`flagged`) and,
-        when every spectrum has n values,
+        ``special_period``, ``special_angle``, ``special_omega`` (NaN where not defined), ``flagged`` (see
+        :attr:`flagged`) and, when every spectrum has n values,
         ``special_spectrum_real``/``_imag`` (special, multiplier).  Attributes: ``format``, ``version``,
         ``kind``, ``outcome``, ``message``, ``m`` and ``accuracy_tol`` (when set), ``components``, ``units`` (JSON)
         and every key of

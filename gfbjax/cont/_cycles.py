@@ -20,9 +20,8 @@ from . import _collocation as col
 from ._branch import Branch, PointRecord
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
-from ._events import (classify, crossed_members, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
-                      multiplier_crossings,
-                      name_crossings)
+from ._events import (classify, crossed_multipliers, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
+                      multiplier_crossings, name_crossings)
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
@@ -286,8 +285,7 @@ class CycleCurve(Curve):
         ``before`` (matched), then those nearest it: a complex pair an NS (two crossings, with its own angle), a
         real negative one a PD, a real positive one a BPC."""
         mu = nontrivial(an["spectrum"], self.problem.n_trivial)
-        crossed = [] if before is None else crossed_members(before, mu, lambda z: np.abs(z) > 1.0,
-                                                            lambda z: np.abs(np.abs(z) - 1.0))
+        crossed = [] if before is None else crossed_multipliers(before, mu)
         named = name_crossings(mu, count, lambda z: abs(abs(z) - 1.0), "NS",
                                lambda z: "PD" if z.real < 0 else "BPC", crossed)
         return [(k, {"angle": abs(float(np.angle(z)))} if k == "NS" else {}) for k, z in named]

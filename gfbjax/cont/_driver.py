@@ -416,7 +416,10 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             found = [f for f in (_localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
                                  for kind in c.events(tests, tests_n, s.detect)) if f is not None]
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
-        start_reported = any(p.index == len(run.points) - 1 and p.lam == c.lam(X) for p in run.special)
+        # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
+        # the branch begins, not a crossing still to come
+        start_reported = len(run.points) <= 1 or any(p.index == len(run.points) - 1 and p.lam == c.lam(X)
+                                                     for p in run.special)
         missing = _unexplained(c, tests, tests_n, s.detect, found, start_reported)
         if ((unlocated and s.locate and direction is not None or missing)
                 and bound is None and refined < s.event_refine and 0.5 * ds >= s.ds_min):

@@ -103,6 +103,16 @@ def _hopf_factors(ev: np.ndarray):
     return (ev[i] + ev[j]) / (np.abs(ev[i]) + np.abs(ev[j]) + 1e-300), i, j
 
 
+def _unstable(z: np.ndarray) -> np.ndarray:
+    """Eigenvalues on the unstable side (right half plane)."""
+    return z.real > 0.0
+
+
+def _from_axis(z: np.ndarray) -> np.ndarray:
+    """Relative distance of eigenvalues from the imaginary axis (the matching's boundary test)."""
+    return np.abs(z.real) / np.maximum(1.0, np.abs(z))
+
+
 class EquilibriumCurve(Curve):
     kind = "equilibria"
     event_weights = {"FOLD": 1, "BP": 1, "HOPF": 2}  # eigenvalues crossing the imaginary axis at each event
@@ -172,15 +182,13 @@ class EquilibriumCurve(Curve):
         (matched), then those nearest it: a complex pair a HOPF (two crossings, with its own omega), a real one a
         BP."""
         ev = an["spectrum"]
-        crossed = [] if before is None else crossed_members(before, ev, lambda z: z.real > 0.0,
-                                                            lambda z: np.abs(z.real) / np.maximum(1.0, np.abs(z)))
+        crossed = [] if before is None else crossed_members(before, ev, _unstable, _from_axis)
         return [(k, {"omega": abs(z.imag)} if k == "HOPF" else {})
                 for k, z in _name_crossings(ev, count, lambda z: abs(z.real), "HOPF", lambda z: "BP", crossed)]
 
     def crossings(self, before, after):
         """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""
-        return matched_crossings(before, after, lambda z: z.real > 0.0,
-                                 lambda z: np.abs(z.real) / np.maximum(1.0, np.abs(z)))
+        return matched_crossings(before, after, _unstable, _from_axis)
 
     def events(self, prev, cur, kinds):
         found = sign_changes(prev, cur, kinds)

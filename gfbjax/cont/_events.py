@@ -96,7 +96,12 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
 
 def multiplier_crossings(before: np.ndarray, after: np.ndarray) -> int:
     """:func:`matched_crossings` for multipliers (unstable: outside the unit circle)."""
-    return matched_crossings(before, after, lambda z: np.abs(z) > 1.0, lambda z: np.abs(np.abs(z) - 1.0))
+    return len(crossed_multipliers(before, after))
+
+
+def crossed_multipliers(before: np.ndarray, after: np.ndarray) -> list[int]:
+    """:func:`crossed_members` for multipliers (unstable: outside the unit circle)."""
+    return crossed_members(before, after, lambda z: np.abs(z) > 1.0, lambda z: np.abs(np.abs(z) - 1.0))
 
 
 #: How many multipliers cross the unit circle at each event (for the driver's check that a step's sign changes

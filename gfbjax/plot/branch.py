@@ -89,7 +89,7 @@ def _mark_special(ax, s: Any, ys: Sequence[float], label: str | None = None, ms:
 def _special_text(s: Any) -> str:
     # the estimated error where it reaches the printed digits: a location is no more certain than that
     err = getattr(s, "lam_error", math.nan)
-    tail = f" +- {err:.0e}" if np.isfinite(err) and err >= 5e-5 else ""
+    tail = f" +- {err:.1e}" if np.isfinite(err) and err >= 5e-5 else ""
     return f"{s.type}{'' if s.located else '?'} {s.lam:.4f}{tail}"
 
 

@@ -148,6 +148,8 @@ def test_start_exactly_at_a_fold_gives_both_halves():
         assert br.outcome is Outcome.REACHED_END, br.message
         x = br.states["x"][:, 0]
         np.testing.assert_allclose(x ** 2, br.lam, atol=1e-10)
+        # the zero eigenvalue at the start is where the branch begins: no branch point (a fresh user's find)
+        assert br.special == [], br.special
         halves[d] = x
     assert np.all(halves[1][1:] > 0) and np.all(halves[-1][1:] < 0)
 

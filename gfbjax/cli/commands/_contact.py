@@ -45,8 +45,8 @@ def contact_summary(branch: Any, spec: Any) -> dict[str, Any] | None:
             "at_Omega_bar": float(branch.lam[int(np.argmin(h))]), "h_rub_over_c": info.get("minimum"),
             "on_contact": "stop" if info.get("stop", True) else "flag", "points_in_contact": int(np.sum(low)),
             "first_contact_Omega_bar": float(branch.lam[int(np.argmax(low))]) if low.any() else None,
-            "first_contact_is": ("the located crossing" if str(branch.outcome) == "contact" else
-                                 "the first point at or below h_rub (not located: --on-contact flag)")}
+            "first_contact_is": (None if not low.any() else "the located crossing" if str(branch.outcome) == "contact"
+                                 else "the first point at or below h_rub (not located: --on-contact flag)")}
 
 
 def contact_line(branch: Any, spec: Any) -> str:

@@ -170,7 +170,7 @@ def format_table(rows: list[dict[str, Any]]) -> str:
         ang = f"{d['ns_angle_rad']:.4f} rad" if "ns_angle_rad" in d else ""
         flags = f"  FLAGGED: {', '.join(d['flags'])}" if d.get("flags") else ""
         err = d.get("Omega_bar_error")
-        lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {'?' if err is None else f'{err:.0e}':>8} "
+        lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {'?' if err is None else f'{err:.1e}':>8} "
                      f"{d['rpm']:>9.0f}  {mods:<30} {ang:>12}  {'yes' if d['located'] else 'no'}{flags}")
     return "\n".join(lines)
 

@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
                  f"NOT located: the test function jumps there (by {d['residual']:.1e})" if d["residual"] is not None
                  else "NOT located: values at the first point past it")
         if d.get("Omega_bar_error") is not None:
-            where += f"; Omega_bar +- {d['Omega_bar_error']:.0e}"
+            where += f"; Omega_bar +- {d['Omega_bar_error']:.1e}"
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
     print("\n".join(lines), flush=True)
 
