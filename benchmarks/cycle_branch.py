@@ -41,16 +41,20 @@ def main() -> None:
     ap.add_argument("--dlam-max", type=float, default=0.02)
     ap.add_argument("--m", type=int, default=4, help="collocation points per interval")
     ap.add_argument("--N", type=int, default=16, help="mesh intervals")
+    ap.add_argument("--collocation", choices=("gauss", "radau"), default=None,
+                    help="collocation points (default: that of default_cycle_settings)")
     ap.add_argument("--no-dense", action="store_true", help="skip the dense-condensation reference iteration")
     ap.add_argument("--out", default=str(RESULTS / "cycle_branch.json"))
     a = ap.parse_args()
 
     params = gfbjax.reference_system(Nx=a.nx, Nz=a.nz).nondim()
     prob = gfb_cycle_problem(params)
-    settings = default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N)
+    extra = {} if a.collocation is None else {"collocation": a.collocation}
+    settings = default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N, **extra)
 
     t0 = time.perf_counter()
-    warm = continue_gfb_cycles(params, a.start, a.end, default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N, max_points=3))
+    warm = continue_gfb_cycles(params, a.start, a.end, default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N, max_points=3,
+                                                                          **extra))
     t_compile = time.perf_counter() - t0
     assert len(warm) == 3, f"{warm.outcome}: {warm.message}"
 
@@ -70,6 +74,13 @@ def main() -> None:
         "compile_and_first_3_points_s": round(t_compile, 2), "branch_s": round(t_branch, 2),
         "per_point_s": round(t_branch / len(branch), 3),
         "max_trivial_error": float(np.max(branch.trivial_error)), "special": special,
+        "collocation": settings.collocation, "flagged_points": int(np.sum(branch.flagged)),
+        "max_stiff_modulus": float(np.max(branch.stiff_modulus)),
+        "max_multiplier_error": float(np.max(branch.multiplier_error)),
+        "multiplier_error_by_speed": [[round(float(l), 4), float(f"{v:.2e}")]
+                                      for l, v in zip(branch.lam, branch.multiplier_error)],
+        "stiff_modulus_by_speed": [[round(float(l), 4), round(float(v), 4)]
+                                   for l, v in zip(branch.lam, branch.stiff_modulus)],
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform()},
         "versions": {"jax": jax.__version__},
         "note": "wall times on a shared 2-core machine; other processes may have run at the same time",
@@ -102,7 +113,11 @@ def main() -> None:
             ("Omega_bar reached", f"{rec['reached']:.4f}"), ("compile + 3 points [s]", rec["compile_and_first_3_points_s"]),
             ("branch after compilation [s]", rec["branch_s"]), ("per point [s]", rec["per_point_s"]),
             ("Newton iterations (all points)", rec["newton_iterations"]),
-            ("max |mu_trivial - 1|", f"{rec['max_trivial_error']:.2e}")]
+            ("max |mu_trivial - 1|", f"{rec['max_trivial_error']:.2e}"),
+            ("collocation points", rec["collocation"]),
+            ("spurious multipliers up to |mu| (stiff_modulus)", f"{rec['max_stiff_modulus']:.3f}"),
+            ("max multiplier error (frozen-coefficient estimate)", f"{rec['max_multiplier_error']:.1e}"),
+            ("flagged points", rec["flagged_points"])]
     rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f}"
               + ("" if s["Omega_bar_error"] is None else f" +- {s['Omega_bar_error']:.0e}") + f" ({s['rpm']:.0f} rpm)")
              for s in special]

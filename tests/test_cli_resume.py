@@ -141,13 +141,14 @@ def test_special_points_in_contact_or_unresolved_are_flagged():
     br = Branch(lam=np.array([0.2, 0.22, 0.24, 0.26]), monitor=np.array([0.3, 0.1, -0.05, -0.1]),
                 monitor_info={"minimum": 0.0, "stop": False}, accuracy_tol=1e-3,
                 trivial_error=np.array([1e-9, 1e-2, 1e-9, 1e-9]), mesh_tol=1e-4,
-                mesh_error=np.array([1e-6, 1e-6, 1e-6, 1e-3]))
-    assert _row_flags(br, 0) == []
+                mesh_error=np.array([1e-6, 1e-6, 1e-6, 1e-3]), stiff_modulus=np.array([0.95, 0.1, 0.1, 0.1]),
+                stiff_tol=0.9, multiplier_error=np.array([0.0, 0.0, 0.0, 2e-3]), multiplier_tol=1e-3)
+    assert _row_flags(br, 0) == ["spurious multipliers"]
     assert _row_flags(br, 1) == ["trivial error"]
     assert _row_flags(br, 2) == ["film contact"]
-    assert _row_flags(br, 3) == ["film contact", "mesh error"]
+    assert _row_flags(br, 3) == ["film contact", "mesh error", "multipliers unresolved"]
     row = {"type": "NS", "Omega_bar": 0.24, "rpm": 9000.0, "multiplier_moduli": [1.0, 1.0], "located": True,
-           "flags": _row_flags(br, 2)}
+           "localisation": "located", "flags": _row_flags(br, 2)}
     assert "FLAGGED: film contact" in format_table([row])
 
 
@@ -157,9 +158,38 @@ def test_special_point_table_gives_the_estimated_error():
     from gfbjax.cli.commands.cycles import format_table
 
     rows = [{"type": "NS", "Omega_bar": 0.3768, "rpm": 13326.0, "multiplier_moduli": [1.0, 1.0], "located": True,
-             "Omega_bar_error": 2.1e-5, "flags": []},
+             "localisation": "located", "Omega_bar_error": 2.1e-5, "flags": []},
             {"type": "PD", "Omega_bar": 0.5, "rpm": 17700.0, "multiplier_moduli": [1.0], "located": False,
-             "Omega_bar_error": None, "flags": []}]
+             "localisation": "not localised", "Omega_bar_error": None, "flags": ["not localised"]}]
     lines = format_table(rows).splitlines()
     assert "+-" in lines[1]
     assert "2.1e-05" in lines[2] and lines[3].split()[2] == "?"
+    assert lines[2].rstrip().endswith("located") and "FLAGGED" not in lines[2]
+    assert "FLAGGED: not localised" in lines[3]
+
+
+def test_unlocated_special_points_are_flagged_in_the_table():
+    """A special point that was not located carries how it was placed ("bracketed": a jump pinned down, no zero;
+    "not localised": the first point past it) as a flag of its row, not only in the last column."""
+    from gfbjax.cli.commands.cycles import format_table, special_summary
+    from gfbjax.cont import SpecialPoint
+    from gfbjax.params import SystemSpec
+
+    from types import SimpleNamespace
+
+    mu = np.array([1.0, -0.5 + 0.9j, -0.5 - 0.9j])
+    class Rows(SimpleNamespace):
+        def __len__(self):
+            return len(self.lam)
+
+    br = Rows(lam=np.array([0.2, 0.22, 0.24]), xmax=np.ones((3, 2)), xmin=-np.ones((3, 2)), monitor=None,
+              monitor_info=None, accuracy_tol=None, mesh_error=None, mesh_tol=None, stiff_modulus=None,
+              stiff_tol=None, multiplier_error=None, multiplier_tol=None, special=[
+        SpecialPoint("NS", 0.21, 1, mu, located=True, residual=1e-10, lam_error=1e-6, angle=2.0),
+        SpecialPoint("NS", 0.23, 2, mu, located=False, residual=0.3, lam_error=8e-11, angle=2.0),
+        SpecialPoint("PD", 0.24, 2, mu, located=False)])
+    rows = special_summary(br, SystemSpec())
+    assert [r["localisation"] for r in rows] == ["located", "bracketed", "not localised"]
+    assert [r["flags"] for r in rows] == [[], ["bracketed"], ["not localised"]]
+    lines = format_table(rows).splitlines()[2:]
+    assert "FLAGGED" not in lines[0] and "FLAGGED: bracketed" in lines[1] and "FLAGGED: not localised" in lines[2]

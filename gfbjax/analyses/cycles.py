@@ -171,7 +171,7 @@ def unbalance_response_start(params: Params, omega: float, settings: cont.CycleS
 
     settings = settings or default_cycle_settings()
     x_of_t, T, eq = linear_response_start(params, omega, equilibrium)
-    scheme = cont.Scheme(settings.m)
+    scheme = cont.Scheme(settings.m, settings.collocation)
     mesh = cont.uniform_mesh(settings.N)
     xe_core = np.asarray(eq.state)
     h_eq, dh = _guess_films(params, x_of_t, xe_core)

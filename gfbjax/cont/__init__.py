@@ -35,7 +35,7 @@ from ._cycles import (CycleStart as CycleStart, analyse as analyse, bind_solver 
                       start_from_branch as start_from_branch,
                       start_from_function as start_from_function, start_from_hopf as start_from_hopf,
                       start_from_pd as start_from_pd, start_from_samples as start_from_samples)
-from ._driver import locate as locate
+from ._localise import locate as locate
 from ._equilibria import HopfPoint as HopfPoint, continue_equilibria as continue_equilibria, hopf_point as hopf_point
 from ._floquet import (Arnoldi as Arnoldi, BlockKrylov as BlockKrylov, FloquetMethod as FloquetMethod, PeriodicQR as PeriodicQR,
                        PeriodicQRResult as PeriodicQRResult, TransferProduct as TransferProduct,

@@ -40,6 +40,11 @@ JSON sidecar, one object:
   below ``minimum`` are flagged;
 - ``mesh_tol``: null, or the largest accepted a-posteriori mesh error of a cycle (:mod:`._mesh`), whose value at
   every point is the npz array ``mesh_error`` (P,); points above it are flagged;
+- ``stiff_tol``: null, or the largest accepted modulus of the multipliers the mesh gives the fast modes (exactly
+  about 0; :mod:`._resolution`), whose value at every point is the npz array ``stiff_modulus`` (P,); points
+  above it are flagged; ``multiplier_tol``: likewise for the estimated error of the deciding multipliers, the
+  array ``multiplier_error`` (P,); ``collocation``: the cycles' collocation points ("gauss" or "radau"; null for
+  equilibria and for files written before it was recorded, which are Gauss);
 - ``meta``: a JSON object the caller attached (:attr:`Branch.meta`).  The engine writes none of it; the bearing
   analyses (:mod:`gfbjax.analyses.cycles`) record there the system (SI spec with its conventions, dimensionless
   groups), the grid, the state layout and the rpm conversion.
@@ -104,6 +109,8 @@ class PointRecord:
     state: dict[str, np.ndarray] | None = None
     monitor: float = math.nan
     mesh_error: float = math.nan
+    stiff_modulus: float = math.nan
+    multiplier_error: float = math.nan
 
 
 @dataclass
@@ -144,6 +151,11 @@ class Branch:
     monitor_info: dict[str, Any] | None = None
     mesh_error: np.ndarray | None = None
     mesh_tol: float | None = None
+    stiff_modulus: np.ndarray | None = None
+    stiff_tol: float | None = None
+    multiplier_error: np.ndarray | None = None
+    multiplier_tol: float | None = None
+    collocation: str | None = None
 
     def __len__(self) -> int:
         return len(self.lam)
@@ -154,7 +166,10 @@ class Branch:
         are not accurate to that level, so their stability labels cannot be trusted: refine the mesh), and points
         whose monitored bound is violated (``monitor <= monitor_info["minimum"]``: outside the model's validity,
         e.g. a closed film), and cycles whose estimated mesh error exceeds ``mesh_tol`` (the orbit, its period and
-        multipliers are not resolved to that level).  All False for a branch with none of these."""
+        multipliers are not resolved to that level), and cycles whose fast modes get multipliers above
+        ``stiff_tol`` while their exact value is about 0 (:mod:`._resolution`: a spurious multiplier in the band
+        where stability and events are decided), and cycles whose deciding multipliers the mesh does not resolve
+        to ``multiplier_tol``.  All False for a branch with none of these."""
         out = np.zeros(len(self), bool)
         if self.accuracy_tol is not None:
             err = np.asarray(self.trivial_error, float)
@@ -163,6 +178,10 @@ class Branch:
             out |= np.asarray(self.monitor, float) <= float(self.monitor_info["minimum"])
         if self.mesh_error is not None and self.mesh_tol is not None:
             out |= np.asarray(self.mesh_error, float) > self.mesh_tol
+        if self.stiff_modulus is not None and self.stiff_tol is not None:
+            out |= np.asarray(self.stiff_modulus, float) > self.stiff_tol
+        if self.multiplier_error is not None and self.multiplier_tol is not None:
+            out |= np.asarray(self.multiplier_error, float) > self.multiplier_tol
         return out
 
     @classmethod
@@ -171,7 +190,8 @@ class Branch:
                     outcome: Outcome, message: str = "", m: int | None = None,
                     shared_state: dict[str, np.ndarray] | None = None,
                     accuracy_tol: float | None = None, monitor_info: dict[str, Any] | None = None,
-                    mesh_tol: float | None = None) -> "Branch":
+                    mesh_tol: float | None = None, stiff_tol: float | None = None,
+                    multiplier_tol: float | None = None, collocation: str | None = None) -> "Branch":
         def stack(name, dtype=float, shape=(0,)):
             vals = [getattr(p, name) for p in points]
             return np.array(vals, dtype=dtype) if vals else np.zeros(shape, dtype)
@@ -197,7 +217,10 @@ class Branch:
                    stack("tangent_lam"), list(special), Outcome(outcome), message, states, list(special_states), m,
                    accuracy_tol=accuracy_tol, monitor=None if monitor_info is None else stack("monitor"),
                    monitor_info=monitor_info, mesh_error=None if mesh_tol is None else stack("mesh_error"),
-                   mesh_tol=mesh_tol)
+                   mesh_tol=mesh_tol, stiff_modulus=None if stiff_tol is None else stack("stiff_modulus"),
+                   stiff_tol=stiff_tol,
+                   multiplier_error=None if multiplier_tol is None else stack("multiplier_error"),
+                   multiplier_tol=multiplier_tol, collocation=collocation)
 
     def special_of(self, kind: str) -> list[SpecialPoint]:
         return [s for s in self.special if s.type == kind]
@@ -219,12 +242,17 @@ class Branch:
             arrays["monitor"] = np.asarray(self.monitor, float)
         if self.mesh_error is not None:
             arrays["mesh_error"] = np.asarray(self.mesh_error, float)
+        if self.stiff_modulus is not None:
+            arrays["stiff_modulus"] = np.asarray(self.stiff_modulus, float)
+        if self.multiplier_error is not None:
+            arrays["multiplier_error"] = np.asarray(self.multiplier_error, float)
         head = {"format": FORMAT, "version": FORMAT_VERSION, "kind": self.kind, "points": len(self),
                 "components": [int(c) for c in self.components],
                 "component_names": None if self.component_names is None else list(self.component_names),
                 "units": dict(self.units), "outcome": str(self.outcome), "message": self.message, "m": self.m,
                 "special": [s.to_json() for s in self.special], "keys": sorted(arrays), "meta": self.meta,
-                "accuracy_tol": self.accuracy_tol, "monitor": self.monitor_info, "mesh_tol": self.mesh_tol}
+                "accuracy_tol": self.accuracy_tol, "monitor": self.monitor_info, "mesh_tol": self.mesh_tol,
+                "stiff_tol": self.stiff_tol, "multiplier_tol": self.multiplier_tol, "collocation": self.collocation}
         try:  # serialise before writing: a meta that is not JSON-able leaves no half-written pair behind
             text = json.dumps(head, indent=1, default=_json_default)
         except (TypeError, ValueError) as exc:
@@ -304,13 +332,25 @@ class Branch:
             "ds": var(("point",), self.ds, "ds"),
             "tangent_lam": var(("point",), self.tangent_lam, "tangent_lam"),
             "flagged": (("point",), np.asarray(self.flagged, bool),
-                        {"long_name": "trivial multiplier farther than accuracy_tol from +1, or monitor at or "
-                                      "below its minimum"}),
+                        {"long_name": "not trusted (Branch.flagged): trivial multiplier farther than "
+                                      "accuracy_tol from +1, monitor at or below its minimum, mesh error above "
+                                      "mesh_tol, a spurious multiplier of unresolved fast modes above stiff_tol, or "
+                                      "multipliers not resolved to multiplier_tol"}),
         }
         if self.mesh_error is not None:
             data["mesh_error"] = (("point",), np.asarray(self.mesh_error, float),
                                   {"long_name": "estimated collocation mesh error, relative to 1 + max|x|",
                                    "mesh_tol": float(self.mesh_tol)})
+        if self.stiff_modulus is not None:
+            data["stiff_modulus"] = (("point",), np.asarray(self.stiff_modulus, float),
+                                     {"long_name": "largest modulus this mesh gives the fast modes' Floquet "
+                                                   "multipliers (exactly about 0; 0: resolved)",
+                                      "stiff_tol": float(self.stiff_tol)})
+        if self.multiplier_error is not None:
+            data["multiplier_error"] = (("point",), np.asarray(self.multiplier_error, float),
+                                        {"long_name": "estimated error of the visible modes' Floquet multipliers on "
+                                                      "this mesh (frozen-coefficient model)",
+                                         "multiplier_tol": float(self.multiplier_tol)})
         if self.monitor is not None and self.monitor_info is not None:
             info = self.monitor_info
             data["monitor"] = (("point",), np.asarray(self.monitor, float),
@@ -356,6 +396,8 @@ class Branch:
             attrs["m"] = int(self.m)
         if self.accuracy_tol is not None:
             attrs["accuracy_tol"] = float(self.accuracy_tol)
+        if self.collocation is not None:
+            attrs["collocation"] = self.collocation
         for key, v in self.meta.items():
             attrs[f"meta_{key}"] = _attr(v)
         return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -521,16 +563,26 @@ def _monitor(head: dict[str, Any], data: dict[str, np.ndarray], P: int, npz: Pat
     return {"monitor": values.astype(float), "monitor_info": dict(info)}
 
 
-def _mesh_error(head: dict[str, Any], data: dict[str, np.ndarray], P: int, npz: Path, js: Path) -> dict[str, Any]:
-    tol = head.get("mesh_tol")
+def _tolerance_array(head: dict[str, Any], data: dict[str, np.ndarray], P: int, npz: Path, js: Path,
+                     array: str, tol_key: str, upper: float = math.inf) -> dict[str, Any]:
+    """An array checked against a tolerance in the JSON (``mesh_error``/``mesh_tol``,
+    ``stiff_modulus``/``stiff_tol``): both present and of P points, or the tolerance null (older files)."""
+    tol = head.get(tol_key)
     if tol is None:
         return {}
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
-        raise BranchFileError(f"{js}: 'mesh_tol' must be a positive number or null, got {tol!r}")
-    values = data.get("mesh_error")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol <= upper:
+        raise BranchFileError(f"{js}: {tol_key!r} must be a number in (0, {upper:g}] or null, got {tol!r}")
+    values = data.get(array)
     if values is None or values.shape != (P,):
-        raise BranchFileError(f"{npz}: {js.name} gives mesh_tol but the array 'mesh_error' is absent or not ({P},)")
-    return {"mesh_error": values.astype(float), "mesh_tol": float(tol)}
+        raise BranchFileError(f"{npz}: {js.name} gives {tol_key} but the array {array!r} is absent or not ({P},)")
+    return {array: values.astype(float), tol_key: float(tol)}
+
+
+def _collocation(head: dict[str, Any], js: Path) -> str | None:
+    kind = head.get("collocation")
+    if kind is not None and kind not in ("gauss", "radau"):
+        raise BranchFileError(f"{js}: 'collocation' must be \"gauss\", \"radau\" or null, got {kind!r:.40}")
+    return kind
 
 
 def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray], npz: Path, js: Path) -> Branch:
@@ -623,4 +675,6 @@ def _build(cls: type[Branch], head: dict[str, Any], data: dict[str, np.ndarray],
                message=message, states=states, special_states=sp_states, m=m,
                component_names=None if names is None else list(names), units=dict(units), meta=meta,
                accuracy_tol=_accuracy_tol(head, js), **_monitor(head, data, P, npz, js),
-               **_mesh_error(head, data, P, npz, js))
+               collocation=_collocation(head, js), **_tolerance_array(head, data, P, npz, js, "mesh_error", "mesh_tol"),
+               **_tolerance_array(head, data, P, npz, js, "stiff_modulus", "stiff_tol", 1.0),
+               **_tolerance_array(head, data, P, npz, js, "multiplier_error", "multiplier_tol"))

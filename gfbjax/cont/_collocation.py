@@ -99,23 +99,64 @@ def _lagrange_matrices(nodes: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, 
     return l, dl
 
 
+#: Collocation points of a scheme: ``"gauss"`` (Gauss-Legendre, order 2m at the mesh points, AUTO's and the paper's
+#: choice) or ``"radau"`` (right Radau, order 2m - 1, L-stable).
+COLLOCATION_POINTS = ("gauss", "radau")
+
+
 class Scheme:
     """Constants of the degree-``m`` collocation scheme on the unit interval.
 
-    ``nodes``: m+1 equally spaced Lagrange nodes, ``gauss``/``weights``: the m
-    Gauss-Legendre points and weights on [0, 1], ``l``/``dl``: Lagrange basis
-    values and derivatives at the Gauss points, shape (m, m+1).
+    ``nodes``: m+1 equally spaced Lagrange nodes; ``points``/``weights``: the m collocation points on [0, 1] and
+    the weights of the quadrature on them; ``l``/``dl``: Lagrange basis values and derivatives at the collocation
+    points, shape (m, m+1).  ``kind``: one of :data:`COLLOCATION_POINTS`.
+
+    Why two kinds.  Gauss points give the highest order (2m at the mesh points), but the scheme is only A-stable:
+    its stability function R(z) (one interval of y' = lam y, z = h lam) tends to (-1)^m as z -> -inf.  A mode much
+    faster than an interval (|h lam| >> 1) therefore gets a Floquet multiplier near prod R(h lam), close to the
+    unit circle, where the exact one, exp(lam T), is zero.  The orbit is unaffected (such modes are not excited),
+    the multipliers are not: on the GFB reference grid at N = 16 the film's fast modes (lam ~ -600) show up at
+    Omega_bar 0.3 as a band of multipliers at |mu| 0.37-0.45 (exact ~0) that approaches the circle at low speed.
+    Radau points give an L-stable scheme (R(-inf) = 0): those multipliers come out near zero, at one order less
+    accuracy.  Neither cures a mesh too coarse for a mode that oscillates within an interval (|h Im lam| ~ 1 or
+    more): Gauss points keep its modulus roughly (|R| = 1 on the imaginary axis), Radau points damp it away.
+    :meth:`stability` is R for either kind.
     """
 
-    def __init__(self, m: int):
+    def __init__(self, m: int, kind: str = "gauss"):
         if not (isinstance(m, (int, np.integer)) and 2 <= m <= 7):
             raise ValueError(f"m (collocation points per interval) must be an int in [2, 7], got {m!r}")
-        self.m = int(m)
+        if kind not in COLLOCATION_POINTS:
+            raise ValueError(f"collocation must be one of {COLLOCATION_POINTS}, got {kind!r}")
+        self.m, self.kind = int(m), kind
         self.nodes = np.linspace(0.0, 1.0, m + 1)
-        g, w = np.polynomial.legendre.leggauss(m)
-        self.gauss = 0.5 * (g + 1.0)
-        self.weights = 0.5 * w
-        self.l, self.dl = _lagrange_matrices(self.nodes, self.gauss)
+        leg = np.polynomial.legendre.Legendre
+        if kind == "gauss":
+            g, w = np.polynomial.legendre.leggauss(m)
+            self.points, self.weights = 0.5 * (g + 1.0), 0.5 * w
+        else:  # right Radau: the zeros of P_m - P_{m-1} on [-1, 1], the last one at +1
+            self.points = 0.5 * (np.sort((leg.basis(m) - leg.basis(m - 1)).roots().real) + 1.0)
+            self.weights = self._integrals(1.0)
+        self.l, self.dl = _lagrange_matrices(self.nodes, self.points)
+
+    def _integrals(self, upper: Any) -> np.ndarray:
+        """``out[..., j]``: the integral from 0 to ``upper`` of the Lagrange basis on the collocation points."""
+        out = []
+        for j in range(self.m):
+            others = np.delete(self.points, j)
+            c = np.polynomial.polynomial.polyfromroots(others) / np.prod(self.points[j] - others)
+            out.append(np.polynomial.polynomial.polyval(upper, np.polynomial.polynomial.polyint(c)))
+        return np.stack(out, -1)
+
+    def stability(self, z: Any) -> np.ndarray:
+        """R(z): the factor by which one interval of collocation multiplies the solution of y' = lam y, z = h lam
+        (complex array in, same shape out).  exp(z) to the scheme's order for small |z|; for z -> -inf, (-1)^m
+        (Gauss) or 0 (Radau)."""
+        z = np.asarray(z, complex)
+        A = self._integrals(self.points)  # A[i, j] = int_0^{c_i} L_j (the scheme's Runge-Kutta matrix)
+        flat = z.reshape(-1, 1, 1)
+        stage = np.linalg.solve(np.eye(self.m) - flat * A, np.ones((flat.shape[0], self.m, 1)))[..., 0]
+        return (1.0 + z.ravel() * (stage @ self.weights)).reshape(z.shape)
 
     def basis_at(self, pts: np.ndarray) -> np.ndarray:
         """Lagrange basis values at local points ``pts`` in [0,1], shape (len(pts), m+1)."""
@@ -123,10 +164,10 @@ class Scheme:
 
     # hash/eq so that jit caches on the scheme by value
     def __hash__(self) -> int:
-        return hash(("Scheme", self.m))
+        return hash(("Scheme", self.m, self.kind))
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, Scheme) and other.m == self.m
+        return isinstance(other, Scheme) and (other.m, other.kind) == (self.m, self.kind)
 
 
 # --------------------------------------------------------------------------

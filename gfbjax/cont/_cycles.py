@@ -18,6 +18,7 @@ import numpy as np
 
 from . import _collocation as col
 from ._branch import Branch, PointRecord
+from ._checks import check_field_at, check_finite, check_mesh, check_range, check_start
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (classify, crossed_multipliers, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
@@ -28,6 +29,7 @@ from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._newton import LinearSolveError
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
+from ._resolution import resolution
 
 __all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "check_cycle_inputs", "check_cycle_size", "bind_solver", "start_from_samples", "start_from_function",
            "start_from_hopf", "start_from_branch", "start_from_pd"]
@@ -45,19 +47,26 @@ class CycleStart:
 
 
 # ---------------------------------------------------------------- starts
+def _start_mesh(settings: CycleSettings, mesh: Any, T: Any, lam: Any) -> tuple[np.ndarray, float, float]:
+    """The checked mesh (uniform with ``settings.N`` intervals when None), period and parameter of a start."""
+    T = check_range("T (period)", T, 0.0, np.inf, lo_open=True, hi_open=True)
+    lam = check_range("lam", lam, -np.inf, np.inf, lo_open=True, hi_open=True)
+    return check_mesh("mesh", col.uniform_mesh(settings.N) if mesh is None else mesh), T, lam
+
+
 def start_from_samples(t: np.ndarray, x: np.ndarray, T: float, lam: float,
                        settings: CycleSettings, mesh: Any = None) -> CycleStart:
     """From a time-integrated orbit: samples ``x[i] = x(t[i])`` over one period T."""
-    sch = col.Scheme(settings.m)
-    mesh = col.uniform_mesh(settings.N) if mesh is None else mesh
+    sch = col.Scheme(settings.m, settings.collocation)
+    mesh, T, lam = _start_mesh(settings, mesh, T, lam)
     return CycleStart(col.orbit_from_samples(t, x, T, lam, sch, mesh), None, "samples")
 
 
 def start_from_function(x_of_t: Callable[[np.ndarray], np.ndarray], T: float, lam: float,
                         settings: CycleSettings, mesh: Any = None) -> CycleStart:
     """From a function of the scaled time t in [0,1] (vectorised, returns (len(t), n))."""
-    sch = col.Scheme(settings.m)
-    mesh = col.uniform_mesh(settings.N) if mesh is None else mesh
+    sch = col.Scheme(settings.m, settings.collocation)
+    mesh, T, lam = _start_mesh(settings, mesh, T, lam)
     return CycleStart(col.orbit_from_function(x_of_t, T, lam, sch, mesh), None, "function")
 
 
@@ -66,7 +75,7 @@ def start_from_hopf(hopf: Any, settings: CycleSettings) -> CycleStart:
 
     The start is the stationary orbit x0 with T = 2 pi / omega; the tangent is the normalised first harmonic
     Re(v e^{2 pi i t}) (lam, T components 0, the Hopf bifurcation being a pitchfork in the amplitude a)."""
-    sch = col.Scheme(settings.m)
+    sch = col.Scheme(settings.m, settings.collocation)
     mesh = col.uniform_mesh(settings.N)
     x0 = np.asarray(hopf.x, float)
     v = np.asarray(hopf.v, complex)
@@ -99,7 +108,7 @@ def start_from_pd(problem: CycleProblem, branch: Branch, special: Any,
     branch's PD points, or the :class:`SpecialPoint`); transfer matrices from the linear solver of ``settings``."""
     sp = branch.special_of("PD")[special] if isinstance(special, int) else special
     o = _orbit_of(branch.special_states[sp.state])
-    sch = col.Scheme(int(branch.m))
+    sch = col.Scheme(int(branch.m), branch.collocation or "gauss")
     G = bind_solver(problem, sch, settings).linearise(o).transfer_matrices()
     doubled, direction = double_orbit_pd(problem.f, problem.args, o, sch, np.asarray(G))
     return CycleStart(doubled, direction, "PD switch")
@@ -169,7 +178,7 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives."""
     s = settings or CycleSettings()
     check_cycle_inputs(problem, orbit, s)
-    scheme = col.Scheme(int(orbit.xi.shape[1]) + 1)
+    scheme = col.Scheme(int(orbit.xi.shape[1]) + 1, s.collocation)
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
 
@@ -292,10 +301,14 @@ class CycleCurve(Curve):
 
     def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
+        # only for recorded points: the localisation's many evaluations need no resolution estimate
+        nt = np.abs(nontrivial(an["spectrum"], self.problem.n_trivial))
+        stiff, mu_error = resolution(self.problem.f, X, self.problem.args, self.scheme,
+                                     float(np.max(nt, initial=0.0)))
         state = _orbit_state(X) if self.settings.save_states else None
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
                            an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state,
-                           an.get("monitor", float("nan")), error_estimate(X, self.scheme))
+                           an.get("monitor", float("nan")), error_estimate(X, self.scheme), stiff, mu_error)
 
     def state(self, X):
         return _orbit_state(X)
@@ -360,7 +373,8 @@ class CycleCurve(Curve):
         return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,
                                   m=self.scheme.m, accuracy_tol=settings.trivial_tol,
                                   monitor_info=None if self.monitor is None else self.monitor.describe(),
-                                  mesh_tol=settings.mesh_tol)
+                                  mesh_tol=settings.mesh_tol, stiff_tol=settings.stiff_tol,
+                                  multiplier_tol=settings.multiplier_tol, collocation=self.scheme.kind)
 
 
 def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: CycleStart, *,
@@ -385,7 +399,13 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
         raise ValueError(f"a {start.label} start leaves its bifurcation point along a direction of its own; "
                          "natural-parameter steps cannot follow it: use PseudoArclength()")
     check_cycle_inputs(problem, start.orbit, settings)
-    scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1)
+    check_start(settings, start.orbit.lam, "the start's lam")
+    check_mesh("the start orbit's mesh", start.orbit.mesh)
+    for name in ("xm", "xi", "T"):
+        check_finite(f"the start orbit's {name}", getattr(start.orbit, name))
+    check_field_at(problem.f, start.orbit.xm[0], float(start.orbit.lam), problem.args,
+                   "the start orbit's first node")
+    scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1, settings.collocation)
     curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
     ck = as_checkpoint(checkpoint, n=problem.n, start=start.label,
                        problem=fingerprint(problem.f, problem.args, problem.n_trivial),

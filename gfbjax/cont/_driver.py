@@ -12,18 +12,18 @@ One step from a converged point :math:`X_k` with unit tangent :math:`\tau_k`:
 2. a failed correction halves ds; the branch ends with ``STEP_TOO_SMALL`` below ``ds_min``;
 3. a tangent that turned by more than ``max_angle`` from the last one halves ds and retries (a jump to another
    branch, or a bend the step does not resolve);
-4. analyse the new point, evaluate the test functions, and for each event between the two points localise it:
-   the Illinois regula falsi in the arclength ``s`` from the left point, each evaluation a full correction at
-   ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual.  An event that
-   cannot be located halves ds and retries the step (up to ``event_refine`` times): a corrector that jumped to
-   another branch changes the sign of a test function without a zero between, and so does a test function the
-   step does not resolve; a shorter step either removes the spurious event or locates the real one.  The count
+4. analyse the new point, evaluate the test functions, and for each event between the two points localise it
+   (:mod:`._localise`): the Illinois regula falsi in the arclength ``s`` from the left point, each evaluation a full
+   correction at ``X_k + s tau_k``; a located point is inserted in the branch with its test-function residual.  An
+   event that cannot be located halves ds and retries the step (up to ``event_refine`` times): a corrector that
+   jumped to another branch changes the sign of a test function without a zero between, and so does a test function
+   the step does not resolve; a shorter step either removes the spurious event or locates the real one.  The count
    of halvings runs until the event is passed (a step that stops short of it does not restart it).  Branch points
-   (BP, BPC) whose localisation failed because the corrections close to them did not converge are not refined:
-   those corrections are singular next to a branch point, which says nothing about the step; they are reported
-   as not located.  Crossings of the stability boundary that no sign change accounts for (two events in one step
-   cancel in a test function) refine the step the same way; those left after the last halving (events closer
-   than the shortest step) are reported as not located, named from the eigenvalues nearest the boundary
+   (BP, BPC) whose localisation failed because the corrections close to them did not converge are not refined: those
+   corrections are singular next to a branch point, which says nothing about the step; they are reported as not
+   located.  Crossings of the stability boundary that no sign change accounts for (two events in one step cancel in
+   a test function) refine the step the same way; those left after the last halving (events closer than the shortest
+   step) are reported as not located, named from the eigenvalues nearest the boundary
    (:meth:`Curve.crossing_kinds`);
 5. record, call the callback; grow ds after a fast correction.
 
@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import abc
 import math
-from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -52,9 +51,10 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import Checkpoint
 from ._newton import LinearSolveError
+from ._localise import Found, add_discretisation_error, bracket, localise, step_span
 from ._results import Outcome, SpecialPoint
 
-__all__ = ["Curve", "continue_curve", "locate"]
+__all__ = ["Curve", "continue_curve"]
 
 
 class Curve(abc.ABC):
@@ -126,7 +126,7 @@ class Curve(abc.ABC):
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
         when the curve does not provide it or the solve fails.  Used to place branch points across the gap where
-        corrections fail (:func:`_across_the_gap`)."""
+        corrections fail (:func:`._localise._across_the_gap`)."""
         return None
 
     def other_discretisations(self, X: Any, tau: Any) -> list[tuple[Any, Any]]:
@@ -162,89 +162,6 @@ class Curve(abc.ABC):
                                   monitor_info=None if self.monitor is None else self.monitor.describe())
 
     components: list[int]  # recorded state components (their max/min over a cycle are stored)
-
-
-def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_hi: float, *,
-           tol: float = 1e-9, s_tol: float = 1e-10, max_iter: int = 30,
-           info: dict | None = None) -> tuple[float, Any, float, bool]:
-    """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
-
-    ``g(s)`` returns (value, payload) and may return (nan, None) on failure.  Returns (s, payload, value,
-    located): located when |g| <= tol times the larger end value (when that is below 1: then s is found to about
-    tol times s_hi, whatever the test function's scale), or when the bracket has shrunk below s_tol * s_hi with
-    |g| below 1e-6 of its end values (a continuous root); not located when g jumps across a closed bracket, when
-    g_lo and g_hi do not bracket a zero (no evaluation then) or when the iteration budget runs out.  An end value already within
-    ``tol`` is returned after one evaluation there (the point on the event) when a value just inside the end
-    (1e-6 s_hi) shows no sign change in the interior.  ``info``, when given, receives ``"bracket"``: the last
-    (a, b) known to hold the sign change (what an unlocated result is worth).
-    """
-    a, b, ga, gb = 0.0, float(s_hi), float(g_lo), float(g_hi)
-    info = {} if info is None else info
-
-    def done(*result):
-        info["bracket"] = (min(a, b), max(a, b))
-        return result
-
-    if not (np.sign(ga) * np.sign(gb) <= 0):
-        return done(b, None, gb, False)
-    # relative to the end values where they are small: a test function that is itself small across the step (a
-    # product of factors of which only one vanishes) would meet an absolute tolerance far from its zero
-    tol = tol * min(1.0, max(abs(ga), abs(gb)))
-    # An end point on a zero (a point landing on an event): the regula falsi would only creep towards it.  But the
-    # end value can vanish for another reason than the crossing (a second event's factor of a product test function
-    # zero there, while the first crosses inside): a value just inside the end on the far end's side says that no
-    # sign change lies inside, and the end is the event; otherwise the interior is searched, without the end.
-    inset = 1e-6 * b
-    if abs(gb) <= tol:
-        gi, payload = g(b - inset)
-        if np.isfinite(gi) and np.sign(gi) == np.sign(ga):
-            gs, payload = g(b)
-            if np.isfinite(gs):
-                return done(b, payload, gs, abs(gs) <= tol)
-        elif np.isfinite(gi) and np.sign(gi) * np.sign(ga) < 0:
-            b, gb = b - inset, gi
-    if abs(ga) <= tol:
-        gi, payload = g(a + inset)
-        if np.isfinite(gi) and np.sign(gi) == np.sign(gb):
-            gs, payload = g(a)
-            if np.isfinite(gs):
-                return done(a, payload, gs, abs(gs) <= tol)
-        elif np.isfinite(gi) and np.sign(gi) * np.sign(gb) < 0:
-            a, ga = a + inset, gi
-    side = 0
-    best = (b, None, gb)
-    for _ in range(max_iter):
-        if ga == gb:
-            s = 0.5 * (a + b)
-        else:
-            s = b - gb * (b - a) / (gb - ga)
-            if not (min(a, b) < s < max(a, b)):
-                s = 0.5 * (a + b)
-        gs, payload = g(s)
-        if not np.isfinite(gs):
-            s = 0.5 * (a + b)
-            gs, payload = g(s)
-            if not np.isfinite(gs):
-                return done(best[0], best[1], best[2], False)
-        best = (s, payload, gs)
-        if abs(gs) <= tol:
-            return done(s, payload, gs, True)
-        if abs(b - a) <= s_tol * max(1.0, abs(s_hi)):
-            # The bracket closed.  A continuous test function is then tiny next to its values at the ends; one that
-            # jumps across the bracket (a critical eigenvalue swapping, a discontinuous model) is not: bracketed,
-            # not located.
-            return done(s, payload, gs, abs(gs) <= 1e-6 * max(abs(g_lo), abs(g_hi)))
-        if np.sign(gs) == np.sign(gb):
-            b, gb = s, gs
-            if side == -1:
-                ga *= 0.5
-            side = -1
-        else:
-            a, ga = s, gs
-            if side == +1:
-                gb *= 0.5
-            side = +1
-    return done(best[0], best[1], best[2], False)
 
 
 class _Run:
@@ -413,7 +330,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             return _monitor_end(run, X, direction, ds, tests, tests_n, Xn, an_n)
         found = []
         if tests is not None and s.detect:
-            found = [f for f in (_localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
+            found = [f for f in (localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
                                  for kind in c.events(tests, tests_n, s.detect)) if f is not None]
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
@@ -433,7 +350,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             ds, refined = 0.5 * ds, refined + 1
             continue
         if missing and s.detect:  # refined as far as allowed: report, unlocated, what crossed
-            found += [f for f in _unresolved(run, missing, Xn, an_n, tests.get("CRITICAL"), ds)
+            found += [f for f in _unresolved(run, missing, X, Xn, an_n, tests.get("CRITICAL"), ds)
                       if f.kind in s.detect]
         # in the order of the branch: rows stay monotone in s, and an event at the step's end keeps its row index
         for f in sorted(found, key=lambda f: f.s if np.isfinite(f.s) else math.inf):
@@ -491,18 +408,20 @@ def _crossings(tests: dict, tests_n: dict, start_reported: bool = True) -> int:
     return int(max(0.0, abs(tests_n["UNSTABLE"] - tests["UNSTABLE"]) - slack))
 
 
-def _unresolved(run: _Run, missing: int, Xn: Any, an_n: dict, before: np.ndarray | None, ds: float) -> list:
+def _unresolved(run: _Run, missing: int, X: Any, Xn: Any, an_n: dict, before: np.ndarray | None,
+                ds: float) -> list:
     """Unlocated special points (at the point after the step) for ``missing`` crossings that
     :func:`_unexplained` still finds after the last refinement: events closer than ``ds_min`` or
     ``ds / 2^event_refine`` (a double Hopf, two pairs crossing in opposite directions) that no test function's
     sign change accounts for.  Reported, not located, rather than left to a silent flip of the stability flag;
-    named from the members that crossed (:meth:`Curve.crossing_kinds`); the step (``ds``) bounds where."""
+    named from the members that crossed (:meth:`Curve.crossing_kinds`); the step bounds where
+    (:func:`._localise.step_span`)."""
     c = run.curve
     out = []
     for kind, own in c.crossing_kinds(an_n, missing, before):
         extra = c.special(kind, Xn, an_n, located=False)
-        out.append(_Found(kind, Xn, an_n, False, math.nan, {**({} if extra is None else extra), **own},
-                          lam_error=ds))
+        out.append(Found(kind, Xn, an_n, False, math.nan, {**({} if extra is None else extra), **own},
+                          lam_error=step_span(c, kind, X, Xn, ds)))
     return out
 
 
@@ -528,7 +447,7 @@ def _crossed_bound(s: Any, lam0: float, lam1: float) -> float | None:
         return float(s.lam_max)
     if lam1 <= s.lam_min + near(s.lam_min) and s.lam_min < np.inf and lam0 > s.lam_min + near(s.lam_min):
         return float(s.lam_min)
-    if not (s.lam_min <= lam1 <= s.lam_max):  # started outside the bounds
+    if not (s.lam_min <= lam1 <= s.lam_max):  # a step from a point on the bound (a resumed branch) leaving them
         return float(np.clip(lam1, s.lam_min, s.lam_max))
     return None
 
@@ -548,251 +467,13 @@ def _on_bound(c: Curve, X: Any, Xn: Any, tau: Any, bound: float):
     return sol, lin, t
 
 
-@dataclass
-class _Found:
-    """An event of one step, localised (or not) but not yet inserted in the branch."""
-
-    kind: str
-    point: Any
-    analysis: dict
-    located: bool
-    residual: float  # NaN: not bracketed (the point after the step stands for it)
-    extra: dict
-    iterations: int = 0
-    s: float = math.nan
-    tangent_lam: float = math.nan
-    singular: bool = False  # not located because the corrections next to its zero failed (see _bracket)
-    lam_error: float = math.nan  # SpecialPoint.lam_error (the localisation's share until _insert)
-    lam: float | None = None  # where it differs from the point's (a branch point placed across its gap)
-    tangent: Any = None  # at the point (localised points)
-    slope: float = math.nan  # of the test function in the arclength over the step
-    scale: float = math.nan  # the larger test value at the step's ends
-    end: str | None = None  # "left"/"right": the event is the step's first/last point itself (no new row)
-
-
-def _localise(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
-              an_n: dict) -> _Found | None:
-    """Localise ``kind`` between X (left) and Xn; None when the sign change is no bifurcation (the curve's
-    :meth:`Curve.special` says so, e.g. a real collision of multipliers)."""
-    found = _bracket(run, kind, X, tau, ds, tests, tests_n, Xn, an_n)
-    extra = run.curve.special(kind, found.point, found.analysis, found.located)
-    if extra is None:
-        return None
-    found.extra = extra
-    return found
-
-
-def _bracket(run: _Run, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests_n: dict, Xn: Any,
-             an_n: dict) -> _Found:
-    """Drive the test function ``kind`` to zero between X (left) and Xn (regula falsi in the arclength)."""
-    c, s = run.curve, run.s
-    found = _Found(kind, Xn, an_n, False, math.nan, {}, lam_error=ds)  # not localised: somewhere in the step
-    failed = []
-    if s.locate and tau is not None:
-        # Every evaluation lies on the hyperplane at distance sv from X along tau; its guess comes from the
-        # nearest point already on the branch, along that point's own tangent.  Next to a branch point, where the
-        # corrections' basin shrinks with the distance to it, the step's linear predictor from X would start
-        # outside it long before the bracket closes.
-        near = [(0.0, X, tau)]
-        solved: dict[float, tuple] = {}  # sv -> (solution, linearisation) of the converged evaluations
-
-        def solve_at(sv):
-            if sv in solved:
-                return solved[sv]
-            s0, P, t = min(near, key=lambda e: abs(e[0] - sv))
-            along = c.inner(t, tau)
-            pred = c.add(P, c.scale(t, (sv - s0) / along if along > 0.5 else sv - s0))
-            sol, lin = c.correct(pred, c.palc_constraint(X, tau, sv, pred))
-            if not sol.converged:
-                failed.append(sv)
-                return None
-            near.append((sv, sol.x, sol.aux))
-            solved[sv] = (sol, lin)
-            return solved[sv]
-
-        def g(sv):
-            got = solve_at(sv)
-            if got is None:
-                return float("nan"), None
-            sol, lin = got
-            a = c.analyse(sol.x, lin, sol.aux)
-            tl = float(c.lam(sol.aux))
-            return c.tests(a, tl)[kind], (sol, a, tl)
-
-        info: dict = {}
-        sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol, info=info)
-        if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
-            sol, an, tl = payload
-            found = _Found(kind, sol.x, an, bool(located), float(val), {}, int(sol.iterations), sv, tl,
-                           end="left" if sv == 0.0 else "right" if sv == ds else None)
-            # the test function's slope in the arclength, from the step's ends: enough for an error estimate
-            found.slope = (tests_n[kind] - tests[kind]) / ds
-            found.scale = max(abs(tests[kind]), abs(tests_n[kind]))
-            found.tangent = sol.aux
-            if located:
-                found.lam_error = abs(tl * float(val) / found.slope) if found.slope else math.nan
-            else:  # bracketed: where in the bracket the zero lies is unknown.  Its width in the arclength bounds
-                # its width in lam (lam is a unit-weight component of the curve's norm); |tl| times it would not,
-                # where lam turns (the side branch of a pitchfork at its branch point)
-                lo, hi = info["bracket"]
-                found.lam_error = hi - lo
-    # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
-    # jump to another branch makes the test function change sign far from zero, with or without failures)
-    found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
-                      and abs(found.residual) <= 1e-3 * max(abs(tests[kind]), abs(tests_n[kind])))
-    if found.singular and found.slope:
-        # There the test function is noise of size |residual| about its zero, resolved only to |residual / slope|
-        # in s however tight the bracket: a multiplier through +1 next to the trivial one is computed to about the
-        # square root of the rounding (3.6e-7 at the Brusselator's branch points, test_cont_brusselator.py).
-        found.lam_error = max(found.lam_error, abs(found.residual / found.slope))
-        across = _across_the_gap(run, solve_at, found.s, ds)
-        if across is not None and across[1] < found.lam_error:
-            found.lam, found.lam_error = across
-    return found
-
-
-def _across_the_gap(run: _Run, solve_at: Callable, center: float, ds: float) -> tuple[float, float] | None:
-    """(lam, error) of a branch point whose corrections fail next to it, from a regular test function
-    interpolated across the gap; None where the curve has none or it does not apply.
-
-    The test function that detected it is read off the spectrum (a multiplier through +1 beside the trivial one:
-    noise of ~sqrt(eps)).  Here the branch point is where the augmented Jacobian A (the curve's equations and its
-    continuation row) is singular, a property of A alone: with b fixed and c the unit vector along A^{-1} b next
-    to it (at ``center``, the noisy test's zero, at arclength ``center`` in a step of ``ds``), h = -1 / (c . A^{-1}
-    b) passes through zero linearly there (A^{-1} b, dominated by the null vector, turns round through infinity),
-    and is computed to rounding wherever a correction converges (:meth:`Curve.border_solve`).  Far from it the
-    sign of c . A^{-1} b says nothing, so a bracket is sought at distances doubling from ``center``; then the
-    regula falsi on h tightens it as far as corrections converge (to ~1e-5 in s on the Brusselator: they fail
-    within a few 1e-6 of the branch point), and the zero of the line through its ends is the estimate; its error,
-    the largest distance to the zero of a parabola through both ends and an evaluation beyond either."""
-    c = run.curve
-    values: dict[float, tuple[float, float]] = {}  # sv -> (h, lam)
-    cvec = []
-
-    def h(sv):
-        if sv in values:
-            return values[sv][0], values[sv]
-        got = solve_at(sv)
-        w = None if got is None else c.border_solve(got[0].x, got[1])
-        if w is None or not np.all(np.isfinite(w)):
-            return float("nan"), None
-        if not cvec:
-            cvec.append(w / np.linalg.norm(w))
-        d = float(np.dot(cvec[0], w))
-        if d == 0.0:
-            return float("nan"), None
-        values[sv] = (-1.0 / d, c.lam(got[0].x))
-        return values[sv][0], values[sv]
-
-    if not np.isfinite(h(center)[0]):
-        return None
-    delta = 1e-6 * ds
-    while True:
-        lo, hi = max(center - delta, 0.0), min(center + delta, ds)
-        h_lo, h_hi = h(lo)[0], h(hi)[0]
-        if np.isfinite(h_lo) and np.isfinite(h_hi) and np.sign(h_lo) != np.sign(h_hi):
-            break
-        if (lo == 0.0 and hi == ds) or delta > 0.25 * ds:
-            return None
-        delta *= 4.0
-    info: dict = {}
-    sv, payload, val, located = locate(lambda u: h(lo + u), hi - lo, h_lo, h_hi, tol=1e-12, s_tol=1e-12,
-                                       info=info)
-    if located and payload is not None:
-        return payload[1], 0.0
-    a, b = (lo + u for u in info["bracket"])
-    if a not in values or b not in values:
-        return None
-    (ha, la), (hb, lb) = values[a], values[b]
-    lam_line = la + (lb - la) * ha / (ha - hb)
-    # The error: the zero of the parabola through the bracket's ends and an evaluation beyond either end (one more
-    # correction each, far enough from the branch point to converge), against the line's.
-    w = b - a
-    for extra in (a - w, b + w):
-        if 0.0 <= extra <= ds and extra not in values:
-            h(extra)
-    worst = 0.0
-    for extra in (a - w, b + w):
-        if extra not in values:
-            return lam_line, abs(lb - la)
-        s3 = np.array([a, b, extra]) - a
-        h3 = np.array([ha, hb, values[extra][0]])
-        l3 = np.array([la, lb, values[extra][1]])
-        roots = np.roots(np.polyfit(s3, h3, 2))
-        roots = roots[np.isreal(roots)].real
-        roots = roots[(roots >= 0.0) & (roots <= w)]
-        if roots.size != 1:
-            return lam_line, abs(lb - la)
-        worst = max(worst, abs(float(np.polyval(np.polyfit(s3, l3, 2), roots[0])) - lam_line))
-    return lam_line, worst
-
-
-def _relocated_shift(run: _Run, f: _Found, X2: Any, t2: Any, max_iter: int = 16) -> float:
-    """How far in lam the zero of the test function ``f.kind`` at the localised point ``f.point`` moves when the
-    curve is computed on a finer discretisation (``X2``, ``t2``: the point and its tangent carried there,
-    :meth:`Curve.other_discretisations`); NaN where that relocation fails.
-
-    Why not the per-orbit mesh estimate: the location of a special point depends on the multipliers (or the
-    tangent), whose discretisation error can be far larger than the orbit's.  On the GFB reference branch the
-    orbit's estimate is ~5e-7 while the NS moves by ~1e-4 between meshes; at a kink of the vector field a fold
-    moves by 1e-4 with a trivial multiplier exact to 1e-14.  The move to a mesh twice as fine is about the error of
-    this one (all of it when the finer one is exact, half of it for a first-order method).
-
-    The zero on the finer discretisation, in the arclength s along the carried tangent (each point corrected on
-    the hyperplane at distance s from the carried point): secant steps from the step's slope until the sign
-    changes, then the regula falsi of :func:`locate` on that bracket, to a precision (1e-3 of the test function)
-    that suits an error estimate.  The secant alone would wander where the discrete curve has corners (a mesh
-    node crossing a kink makes the tangent, hence the fold test, jump).  A step that reduces the test function
-    tenfold ends the search at once: the secant's zero is then accurate to far better than the move itself."""
-    c, kind, slope = run.curve, f.kind, f.slope
-    budget = [max_iter]
-
-    def g(sv: float) -> tuple[float, Any]:
-        budget[0] -= 1
-        pred = c.add(X2, c.scale(t2, sv))
-        s2, lin = c.correct(pred, c.palc_constraint(X2, t2, sv, pred))
-        if not s2.converged:
-            return math.nan, None
-        return c.tests(c.analyse(s2.x, lin, s2.aux), float(c.lam(s2.aux)))[kind], c.lam(s2.x)
-
-    s0, (g0, lam0) = 0.0, g(0.0)
-    if not (np.isfinite(g0) and slope and np.isfinite(slope)):
-        return math.nan
-    if abs(g0) <= run.s.locate_tol * min(1.0, f.scale):
-        # already a zero there (to the tolerance the point was located with); a double zero (two events at one
-        # point) would offer the secant no sign change and no decrease
-        return abs(lam0 - c.lam(f.point))
-    s1 = -g0 / slope
-    while budget[0] > 0:
-        g1, lam1 = g(s1)
-        if not np.isfinite(g1):
-            return math.nan
-        if abs(g1) <= 0.1 * abs(g0):
-            # the last step took the test function down tenfold: it is straight here, and the zero is the
-            # secant's, good to about a hundredth of the step (the usual case on a smooth problem: two corrections)
-            lam_z = lam1 - g1 * (lam1 - lam0) / (g1 - g0) if g1 != g0 else lam1
-            return abs(lam_z - c.lam(f.point))
-        if np.sign(g1) != np.sign(g0):
-            lo, hi = (s0, g0), (s1, g1)
-            if s1 < s0:
-                lo, hi = hi, lo
-            _, lam_z, _, _ = locate(lambda u: g(lo[0] + u), hi[0] - lo[0], lo[1], hi[1], tol=1e-3, s_tol=1e-4,
-                                    max_iter=max(budget[0], 1))
-            return math.nan if lam_z is None else abs(lam_z - c.lam(f.point))
-        # same sign: a secant step, at most four times as long as the last one (a flat stretch would fling it)
-        step = -g1 * (s1 - s0) / (g1 - g0) if g1 != g0 else 2.0 * (s1 - s0)
-        step = float(np.clip(step, -4.0 * abs(s1 - s0), 4.0 * abs(s1 - s0)))
-        s0, g0, lam0, s1 = s1, g1, lam1, s1 + step
-    return math.nan
-
-
 def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tests_n: dict, Xn: Any,
                  an_n: dict) -> tuple[Outcome, str]:
     """The branch crossed its monitor's bound: record the located crossing as its last point and end."""
     c, m = run.curve, run.curve.monitor
     where = f"lam = {c.lam(X):.6g}" if tests is not None else "the start"
     if tests is not None and tau is not None and run.s.locate:
-        f = _bracket(run, "MONITOR", X, tau, ds, tests, tests_n, Xn, an_n)
+        f = bracket(run, "MONITOR", X, tau, ds, tests, tests_n, Xn, an_n)
         if np.isfinite(f.residual):
             run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
             where = f"lam = {c.lam(f.point):.6g}"
@@ -800,7 +481,7 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
                              f"{where}: beyond it the solutions leave the model's validity (Monitor.stop)")
 
 
-def _own_member(run: _Run, f: _Found) -> None:
+def _own_member(run: _Run, f: Found) -> None:
     """A second event of the same type at the same point (a step landing exactly on a double Hopf or double NS
     point: each crossing pair's zero is found at that end) takes the next crossing member's data (omega, angle):
     :meth:`Curve.special` reads the one pair nearest the boundary, which the first event already carries."""
@@ -816,7 +497,7 @@ def _own_member(run: _Run, f: _Found) -> None:
             return
 
 
-def _insert(run: _Run, f: _Found) -> None:
+def _insert(run: _Run, f: Found) -> None:
     """Insert a special point (a bracketed one also as a new row of the branch)."""
     c = run.curve
     row = len(run.points)  # the point after the step, recorded next
@@ -826,20 +507,7 @@ def _insert(run: _Run, f: _Found) -> None:
         run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
         row = len(run.points) - 1
     _own_member(run, f)
-    if f.tangent is not None and not f.singular:  # (next to a branch point the relocations would fail alike)
-        # A jump of the test function (a mesh node crossing a kink of the vector field) closes the bracket to
-        # 1e-10 while the exact zero lies 1e-4 away: the discretisation's share is added, located or not.
-        # the estimate must leave the branch as it would be without it: the curve's memo (the Floquet method's warm
-        # start) is restored afterwards, so that a resumed branch, which does not repeat it, agrees to rounding
-        memo = getattr(c, "memo", None)
-        saved = None if memo is None else dict(memo)
-        shifts = [_relocated_shift(run, f, X2, t2) for X2, t2 in c.other_discretisations(f.point, f.tangent)]
-        if memo is not None:
-            memo.clear()
-            memo.update(saved)
-        if shifts:  # NaN (no estimate) only when every relocation failed
-            finite = [v for v in shifts if np.isfinite(v)]
-            f.lam_error += max(finite) if finite else math.nan
+    add_discretisation_error(run, f)
     run.special_states.append(c.state(f.point))
     lam = float(c.lam(f.point) if f.lam is None else f.lam)
     run.special.append(SpecialPoint(type=f.kind, lam=lam, index=row, spectrum=np.asarray(f.analysis["spectrum"]),

@@ -33,6 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._branch import Branch, PointRecord
+from ._checks import check_field_at, check_finite, check_start
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
@@ -151,6 +152,8 @@ class EquilibriumCurve(Curve):
 
     def null_tangent(self, y):
         J = np.asarray(_augmented_jacobian(self.problem.f, self.problem.args, jnp.asarray(y, float)))
+        if not np.all(np.isfinite(J)):
+            return None
         v = np.linalg.svd(J)[2][-1]  # right singular vector of the smallest singular value of [f_x f_lam]
         return v * np.sign(v[np.argmax(np.abs(v))])
 
@@ -238,13 +241,15 @@ def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettin
         raise ValueError(f"problem must be an EquilibriumProblem, got {type(problem).__name__}")
     if not isinstance(settings, EquilibriumSettings):
         raise ValueError(f"settings must be EquilibriumSettings, got {type(settings).__name__}")
-    x0 = np.asarray(x0, float)
+    lam0 = check_start(settings, lam0)
+    x0 = check_finite("x0", x0)
     if x0.shape != (problem.n,):
         raise ValueError(f"x0 must have shape (n,) = ({problem.n},), got {x0.shape}")
     out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((problem.n,), jnp.float64), float(lam0), problem.args)
     if getattr(out, "shape", None) != (problem.n,):
         raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
                          f"shape ({problem.n},); it must return ({problem.n},)")
+    check_field_at(problem.f, x0, lam0, problem.args, "x0")
     y0 = np.append(x0, float(lam0))
     ck = as_checkpoint(checkpoint, n=problem.n, problem=fingerprint(problem.f, problem.args),
                        start_data=fingerprint(y0))

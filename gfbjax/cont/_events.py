@@ -30,7 +30,7 @@ multiplier and the amplitude multiplier form a nearly defective pair that round-
 :math:`1 \pm i\epsilon`; removing one of them leaves a lone complex value, which is replaced by a real one of the
 same modulus (a 1:1 resonance, not a torus).
 
-Localisation is the driver's (:func:`._driver.locate`).
+Localisation is the driver's (:func:`._localise.locate`).
 """
 from __future__ import annotations
 

@@ -37,6 +37,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._checks import check_range, store
+
 
 def multipliers_product(G: np.ndarray) -> np.ndarray:
     """Eigenvalues of the explicitly formed product G[N-1] @ ... @ G[0]."""
@@ -228,10 +230,11 @@ class _Leading(FloquetMethod):
     inside: float = 0.9
 
     def __post_init__(self) -> None:
-        from ._problem import check_range
-        check_range(f"{type(self).__name__} k (number of multipliers)", self.k, 1, 10**6, integer=True)
-        check_range(f"{type(self).__name__} tol", self.tol, 0.0, 1.0, lo_open=True, hi_open=True)
-        check_range(f"{type(self).__name__} inside", self.inside, 0.0, 1.0, lo_open=True, hi_open=True)
+        name = type(self).__name__
+        store(self, "k", check_range(f"{name} k (number of multipliers)", self.k, 1, 10**6, integer=True))
+        for field_, text in (("tol", "tol"), ("inside", "inside")):
+            store(self, field_, check_range(f"{name} {text}", getattr(self, field_), 0.0, 1.0, lo_open=True,
+                                            hi_open=True))
 
 
 @dataclass(frozen=True)
@@ -305,10 +308,10 @@ class BlockKrylov(_Leading):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        from ._problem import check_range
-        check_range("BlockKrylov block", self.block, 1, 10**4, integer=True)
-        check_range("BlockKrylov tol_inside", self.tol_inside, self.tol, 1.0, hi_open=True)
-        check_range("BlockKrylov max_dim", self.max_dim, 2, 10**6, integer=True)
+        store(self, "block", check_range("BlockKrylov block", self.block, 1, 10**4, integer=True))
+        store(self, "tol_inside", check_range("BlockKrylov tol_inside", self.tol_inside, self.tol, 1.0,
+                                              hi_open=True))
+        store(self, "max_dim", check_range("BlockKrylov max_dim", self.max_dim, 2, 10**6, integer=True))
 
     def multipliers(self, lin, memo: dict) -> np.ndarray:
         n = lin.orbit.n

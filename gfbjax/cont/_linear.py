@@ -35,8 +35,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _collocation as col
+from ._checks import store_range
 from ._newton import NewtonSettings, NewtonSolution, solve as newton_solve
-from ._problem import CycleProblem, check_range
+from ._problem import CycleProblem
 
 __all__ = ["LinearSolver", "DenseCondensation", "SparseSweep", "Linearisation", "BoundSolver", "choose_solver",
            "SPARSE_MIN_N"]
@@ -280,11 +281,12 @@ class SparseSweep(LinearSolver):
     permc_spec: str = "COLAMD"
 
     def __post_init__(self) -> None:
-        check_range("gmres_rtol", self.gmres_rtol, 0.0, 1.0, lo_open=True, hi_open=True)
-        check_range("gmres_forcing", self.gmres_forcing, self.gmres_rtol, 1.0, hi_open=True)
-        check_range("chord", self.chord, 0.0, 1.0, hi_open=True)
-        check_range("gmres_restart", self.gmres_restart, 1, 10**6, integer=True)
-        check_range("gmres_maxiter", self.gmres_maxiter, 1, 10**6, integer=True)
+        put = partial(store_range, self)
+        put("gmres_rtol", 0.0, 1.0, lo_open=True, hi_open=True)
+        put("gmres_forcing", self.gmres_rtol, 1.0, hi_open=True)
+        put("chord", 0.0, 1.0, hi_open=True)
+        put("gmres_restart", 1, 10**6, integer=True)
+        put("gmres_maxiter", 1, 10**6, integer=True)
         if self.permc_spec not in ("COLAMD", "NATURAL", "MMD_ATA", "MMD_AT_PLUS_A"):
             raise ValueError(f"permc_spec must be one of COLAMD, NATURAL, MMD_ATA, MMD_AT_PLUS_A, "
                              f"got {self.permc_spec!r}")

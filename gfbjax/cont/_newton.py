@@ -36,6 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._checks import check_flag, check_range, store
 from ._results import Outcome
 
 __all__ = ["NewtonSettings", "NewtonSolution", "LinearSolveError", "solve", "solve_host"]
@@ -67,18 +68,14 @@ class NewtonSettings:
     verify_residual: bool = True
 
     def __post_init__(self) -> None:
-        for name, hi in (("tol", np.inf), ("atol_step", 1.0), ("rtol_step", 1.0)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not 0.0 <= v <= hi \
-                    or (hi < np.inf and v == hi):
-                raise ValueError(f"{name} must be a number in [0, {hi}{']' if hi == np.inf else ')'}, got {v!r}")
+        store(self, "tol", check_range("tol", self.tol, 0.0, np.inf))
+        for name in ("atol_step", "rtol_step"):
+            store(self, name, check_range(name, getattr(self, name), 0.0, 1.0, hi_open=True))
         if self.atol_step == 0.0 and self.rtol_step == 0.0:
             raise ValueError("atol_step and rtol_step cannot both be 0 (no step would ever be small)")
-        if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, (int, np.integer)) \
-                or not 1 <= self.max_iter <= 1000:
-            raise ValueError(f"max_iter must be an int in [1, 1000], got {self.max_iter!r}")
-        if not (isinstance(self.divergence, (int, float)) and self.divergence > 1.0):
-            raise ValueError(f"divergence must be a number > 1, got {self.divergence!r}")
+        store(self, "max_iter", check_range("max_iter", self.max_iter, 1, 1000, integer=True))
+        store(self, "divergence", check_range("divergence", self.divergence, 1.0, np.inf, lo_open=True))
+        store(self, "verify_residual", check_flag("verify_residual", self.verify_residual))
 
 
 class NewtonSolution(eqx.Module):

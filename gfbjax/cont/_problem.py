@@ -16,6 +16,8 @@ from typing import Any, Callable, Sequence
 import jax
 import numpy as np
 
+from ._checks import check_flag, check_range, store
+
 
 @dataclass(frozen=True)
 class Monitor:
@@ -39,8 +41,12 @@ class Monitor:
     def __post_init__(self) -> None:
         if not callable(self.fn):
             raise ValueError(f"Monitor.fn must be callable fn(x, lam, args), got {type(self.fn).__name__}")
-        if not (isinstance(self.minimum, numbers.Real) and np.isfinite(self.minimum)):
-            raise ValueError(f"Monitor.minimum must be a finite number, got {self.minimum!r}")
+        store(self, "minimum", check_range("Monitor.minimum", self.minimum, -np.inf, np.inf, lo_open=True,
+                                           hi_open=True))
+        store(self, "stop", check_flag("Monitor.stop", self.stop))
+        for name in ("name", "unit"):
+            if not isinstance(getattr(self, name), str):
+                raise ValueError(f"Monitor.{name} must be a string, got {getattr(self, name)!r}")
 
 
     def describe(self) -> dict[str, Any]:
@@ -53,19 +59,15 @@ def _check_monitor(problem: Any) -> None:
         raise ValueError(f"monitor must be a Monitor or None, got {type(problem.monitor).__name__}")
 
 
-def _is_int(v: Any) -> bool:
-    return isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_))
-
-
 def _check_common(problem: Any) -> None:
     f, n, record = problem.f, problem.n, problem.record
     if not callable(f):
         raise ValueError(f"f must be callable f(x, lam, args), got {type(f).__name__}")
-    if not (_is_int(n) and n >= 1):
-        raise ValueError(f"n (state dimension) must be an int >= 1, got {n!r}")
-    object.__setattr__(problem, "n", int(n))  # numpy integers are welcome; store a Python int
+    n = check_range("n (state dimension)", n, 1, 10**9, integer=True)
+    store(problem, "n", n)
     if record is not None:
-        bad = [c for c in record if not (_is_int(c) and 0 <= c < n)]
+        bad = [c for c in record if not (isinstance(c, numbers.Integral) and not isinstance(c, (bool, np.bool_))
+                                         and 0 <= c < n)]
         if bad:
             raise ValueError(f"record must hold component indices in [0, {n}), got {bad}")
 
@@ -94,8 +96,7 @@ class CycleProblem:
     def __post_init__(self) -> None:
         _check_common(self)
         _check_monitor(self)
-        if not (isinstance(self.n_trivial, int) and 1 <= self.n_trivial <= self.n):
-            raise ValueError(f"n_trivial must be an int in [1, n={self.n}], got {self.n_trivial!r}")
+        store(self, "n_trivial", check_range("n_trivial", self.n_trivial, 1, self.n, integer=True))
         if self.jac_sparsity is not None and np.shape(self.jac_sparsity) != (self.n, self.n):
             raise ValueError(f"jac_sparsity must have shape (n, n) = ({self.n}, {self.n}), "
                              f"got {np.shape(self.jac_sparsity)}")
@@ -122,16 +123,3 @@ class EquilibriumProblem:
     @property
     def components(self) -> list[int]:
         return list(range(self.n)) if self.record is None else [int(c) for c in self.record]
-
-
-def check_range(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = False,
-                hi_open: bool = False, integer: bool = False) -> None:
-    """Raise ``ValueError`` naming the field unless lo <= value <= hi (open ends optional).  Python and NumPy
-    numbers are accepted (booleans are not); ``integer`` also refuses 16.0."""
-    ok_type = isinstance(value, numbers.Integral if integer else numbers.Real) and not isinstance(
-        value, (bool, np.bool_))
-    ok = ok_type and (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
-    if not ok:
-        rng = f"{'(' if lo_open else '['}{lo}, {hi}{')' if hi_open else ']'}"
-        kind = "an int" if integer else "a number"
-        raise ValueError(f"{name} must be {kind} in {rng}, got {value!r}")

@@ -105,7 +105,8 @@ class SpecialPoint:
     do that: the dense one), and its error is that interpolation's; otherwise the bracket's width, widened to the
     noise of the multiplier test (|residual / slope|).  For those the discretisation's share is not estimated:
     a relocation next to a branch point would fail the same way.
-    Not localised (``locate`` off, every correction failed, or two crossings no step could separate): the step.
+    Not localised (``locate`` off, every correction failed, or two crossings no step could separate): the step's
+    change in lam (a fold, where lam turns inside the step: the step's arclength, which bounds it).
     angle: NS, the argument of the critical multiplier in (0, pi) (rad); omega: HOPF, the imaginary part of the
     critical eigenvalue (per unit time of the problem).  state: index into ``Branch.special_states`` (the full
     state at the point).
@@ -128,6 +129,16 @@ class SpecialPoint:
     def __post_init__(self) -> None:
         if self.type not in SPECIAL_TYPES:
             raise ValueError(f"special point type must be one of {SPECIAL_TYPES}, got {self.type!r}")
+
+    @property
+    def localisation(self) -> str:
+        """How the point was placed, in one word for tables: ``"located"`` (its test function driven to zero),
+        ``"bracketed"`` (a sign change pinned down to ``lam_error``, but the test function jumps there: no zero
+        crossing, so the type-specific data are those of one side), or ``"not localised"`` (reported at the
+        first point past the event)."""
+        if self.located:
+            return "located"
+        return "not localised" if math.isnan(self.residual) else "bracketed"
 
     def to_json(self) -> dict[str, Any]:
         """A JSON-ready dict (complex spectrum as [re, im] pairs)."""

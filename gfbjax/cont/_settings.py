@@ -10,17 +10,18 @@ same way; ``None`` means the automatic choice.
 """
 from __future__ import annotations
 
+import functools
 import math
-import numbers
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ._checks import check_choices, check_flag, check_range, check_sign, store, store_range
+from ._collocation import COLLOCATION_POINTS
 from ._floquet import FloquetMethod
 from ._linear import LinearSolver
 from ._newton import NewtonSettings
-from ._problem import check_range
 
 __all__ = ["PseudoArclength", "Natural", "CycleSettings", "EquilibriumSettings"]
 
@@ -42,8 +43,7 @@ class PseudoArclength:
 
     def __post_init__(self) -> None:
         for name in ("secant", "quadratic"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise ValueError(f"PseudoArclength {name} must be True or False, got {getattr(self, name)!r}")
+            store(self, name, check_flag(f"PseudoArclength {name}", getattr(self, name)))
 
     def predict(self, space: Any, X: Any, X_prev: Any, tau: Any, ds: float, direction: int, dlam_max: float):
         """(prediction, constraint, ds) of the next step; ds is capped so that lam moves at most dlam_max."""
@@ -104,28 +104,26 @@ class _StepSettings:
     event_refine: int = 6
 
     def _check_steps(self) -> None:
-        check_range("ds", self.ds, 0.0, float("inf"), lo_open=True, hi_open=True)
-        check_range("ds_min", self.ds_min, 0.0, self.ds, lo_open=True)
-        check_range("ds_max", self.ds_max, self.ds, float("inf"), hi_open=True)
-        if isinstance(self.direction, (bool, np.bool_)) or self.direction not in (1, -1):
-            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
-        check_range("max_points", self.max_points, 1, 10**7, integer=True)
-        if not (isinstance(self.lam_min, numbers.Real) and isinstance(self.lam_max, numbers.Real)
-                and self.lam_min < self.lam_max):
-            raise ValueError(f"lam_min must be < lam_max, got lam_min={self.lam_min!r}, lam_max={self.lam_max!r}")
-        if not (isinstance(self.dlam_max, numbers.Real) and self.dlam_max > 0.0):
-            raise ValueError(f"dlam_max must be in (0, inf], got {self.dlam_max!r}")
-        check_range("newton_tol", self.newton_tol, 0.0, 1.0, lo_open=True)
-        check_range("newton_max_iter", self.newton_max_iter, 1, 1000, integer=True)
-        check_range("fast_iter", self.fast_iter, 1, self.newton_max_iter, integer=True)
-        check_range("grow", self.grow, 1.0, 10.0)
+        put = functools.partial(store_range, self)
+        inf = float("inf")
+        put("ds", 0.0, inf, lo_open=True, hi_open=True)
+        put("ds_min", 0.0, self.ds, lo_open=True)
+        put("ds_max", self.ds, inf, hi_open=True)
+        store(self, "direction", check_sign("direction", self.direction))
+        put("max_points", 1, 10**7, integer=True)
+        put("lam_min", -inf, inf, hi_open=True)
+        put("lam_max", self.lam_min, inf, lo_open=True)
+        put("dlam_max", 0.0, inf, lo_open=True)
+        put("newton_tol", 0.0, 1.0, lo_open=True)
+        put("newton_max_iter", 1, 1000, integer=True)
+        put("fast_iter", 1, self.newton_max_iter, integer=True)
+        put("grow", 1.0, 10.0)
         if not isinstance(self.algorithm, ALGORITHMS):
             raise ValueError(f"algorithm must be PseudoArclength(...) or Natural(), got {self.algorithm!r}")
-        if not isinstance(self.locate, bool):
-            raise ValueError(f"locate must be True or False, got {self.locate!r}")
-        check_range("locate_tol", self.locate_tol, 0.0, 1.0, lo_open=True)
-        check_range("max_angle", self.max_angle, 0.0, math.pi, lo_open=True)
-        check_range("event_refine", self.event_refine, 0, 60, integer=True)
+        store(self, "locate", check_flag("locate", self.locate))
+        put("locate_tol", 0.0, 1.0, lo_open=True)
+        put("max_angle", 0.0, math.pi, lo_open=True)
+        put("event_refine", 0, 60, integer=True)
 
 
 @dataclass(frozen=True)
@@ -164,6 +162,15 @@ class CycleSettings(_StepSettings):
     interval is the same (:mod:`._mesh`, as AUTO does), and the orbit corrected on it; every point carries its
     estimated mesh error (``Branch.mesh_error``), and one above ``mesh_tol`` (relative to 1 + max|x|) is
     flagged: its orbit, period and multipliers are not resolved to that level (raise ``N``).
+    ``collocation``: the collocation points, ``"gauss"`` (order 2m, as AUTO) or ``"radau"`` (order 2m - 1,
+    L-stable: modes much faster than a mesh interval get multipliers near 0, as they should, where Gauss points
+    put them near the unit circle, but modes oscillating within an interval are damped away; see
+    :class:`~._collocation.Scheme`).  Every point carries the largest modulus the mesh gives its fast modes,
+    whose exact multipliers are about 0 (``Branch.stiff_modulus``, :mod:`._resolution`), and one above
+    ``stiff_tol`` in (0, 1] is flagged: a spurious multiplier lies in the band where stability, events and the
+    trivial multiplier are decided (use ``collocation="radau"`` or more intervals).  It also carries the
+    estimated error of the multipliers that decide stability, events and the leading modulus
+    (``Branch.multiplier_error``), and one above ``multiplier_tol`` in (0, 1] is flagged: more intervals.
     """
 
     m: int = 4
@@ -181,21 +188,27 @@ class CycleSettings(_StepSettings):
     trivial_tol: float = 1e-5
     adapt: int = 3
     mesh_tol: float = 1e-4
+    collocation: str = "gauss"
+    stiff_tol: float = 0.9
+    multiplier_tol: float = 1e-3
 
     def __post_init__(self) -> None:
-        check_range("m", self.m, 2, 7, integer=True)
-        check_range("N", self.N, 2, 10**6, integer=True)
+        store(self, "m", check_range("m", self.m, 2, 7, integer=True))
+        store(self, "N", check_range("N", self.N, 2, 10**6, integer=True))
         self._check_steps()
-        check_range("newton_step_tol", self.newton_step_tol, 0.0, 1.0, lo_open=True)
-        bad = [d for d in self.detect if d not in ("LPC", "PD", "NS", "BPC")]
-        if bad or isinstance(self.detect, str):
-            raise ValueError(f"detect entries must be in ('LPC', 'PD', 'NS', 'BPC'), got {self.detect!r}")
+        store(self, "newton_step_tol", check_range("newton_step_tol", self.newton_step_tol, 0.0, 1.0, lo_open=True))
+        store(self, "detect", check_choices("detect", self.detect, ("LPC", "PD", "NS", "BPC")))
         if self.floquet is not None and not isinstance(self.floquet, FloquetMethod):
             raise ValueError(f"floquet must be PeriodicQR(), TransferProduct(), BlockKrylov(k), Arnoldi(k) or None, "
                              f"got {self.floquet!r}")
-        check_range("trivial_tol", self.trivial_tol, 0.0, 1.0, lo_open=True, hi_open=True)
-        check_range("adapt", self.adapt, 0, 10**6, integer=True)
-        check_range("mesh_tol", self.mesh_tol, 0.0, 1.0, lo_open=True, hi_open=True)
+        store(self, "trivial_tol", check_range("trivial_tol", self.trivial_tol, 0.0, 1.0, lo_open=True, hi_open=True))
+        store(self, "adapt", check_range("adapt", self.adapt, 0, 10**6, integer=True))
+        store(self, "mesh_tol", check_range("mesh_tol", self.mesh_tol, 0.0, 1.0, lo_open=True, hi_open=True))
+        store(self, "save_states", check_flag("save_states", self.save_states))
+        if self.collocation not in COLLOCATION_POINTS:
+            raise ValueError(f"collocation must be one of {COLLOCATION_POINTS}, got {self.collocation!r}")
+        store(self, "stiff_tol", check_range("stiff_tol", self.stiff_tol, 0.0, 1.0, lo_open=True))
+        store(self, "multiplier_tol", check_range("multiplier_tol", self.multiplier_tol, 0.0, 1.0, lo_open=True))
         if self.linear_solver is not None and not isinstance(self.linear_solver, LinearSolver):
             raise ValueError(f"linear_solver must be DenseCondensation(), SparseSweep(...) or None (automatic), "
                              f"got {self.linear_solver!r}")
@@ -227,9 +240,7 @@ class EquilibriumSettings(_StepSettings):
 
     def __post_init__(self) -> None:
         self._check_steps()
-        bad = [d for d in self.detect if d not in ("FOLD", "HOPF", "BP")]
-        if bad or isinstance(self.detect, str):
-            raise ValueError(f"detect entries must be in ('FOLD', 'HOPF', 'BP'), got {self.detect!r}")
+        store(self, "detect", check_choices("detect", self.detect, ("FOLD", "HOPF", "BP")))
 
     @property
     def newton(self) -> NewtonSettings:

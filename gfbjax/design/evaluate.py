@@ -107,7 +107,11 @@ def check_foil(alpha_f: float, eta: float) -> tuple[float, float]:
 class FoilDesign:
     """Limit cycle of ``params`` at speed ``omega`` (Omega_bar) as a function of (alpha_f, eta).
 
-    m, N: collocation points and mesh intervals; linear_solver: ``cont.DenseCondensation()``,
+    m, N: collocation points and mesh intervals; ``collocation``: "gauss" (default) or "radau"
+    (``cont.CycleSettings``).  At low speed N = 16 resolves neither the film's fast modes (Gauss points give
+    them spurious multipliers, which on the default grid exceed the physical ones below Omega_bar ~ 0.25 and so
+    become ``max_mu``) nor the rotor's oscillation over the long period (Radau points damp it away): raise N
+    there (README, "Fast and unresolved modes"); linear_solver: ``cont.DenseCondensation()``,
     ``cont.SparseSweep()`` or None (automatic: sparse on fine grids).  ``orbit``: a first guess (else
     :func:`gfbjax.analyses.cycles.unbalance_response_start`: the linear forced response at the given params, or a
     cycle reached by ramping the unbalance up when that response would close the film).  ``gradient_mode``: 'adjoint' (one transposed solve per objective, for
@@ -119,15 +123,19 @@ class FoilDesign:
 
     def __init__(self, params: Params, omega: float, *, m: int = 4, N: int = 16, linear_solver: cont.LinearSolver | None = None,
                  orbit: Orbit | None = None, newton_tol: float = 1e-9, newton_max_iter: int = 10,
-                 gradient_mode: str = "auto"):
+                 gradient_mode: str = "auto", collocation: str = "gauss"):
         check_params(params)
         omega = limits.SPEED.check(omega, "omega")
         if gradient_mode not in ("auto", "adjoint", "tangent"):
             raise ParameterError(f"gradient_mode = {gradient_mode!r} is not one of ('auto', 'adjoint', 'tangent')")
-        self.settings = cont.CycleSettings(m=m, N=N, linear_solver=linear_solver, newton_tol=newton_tol,
-                                           newton_step_tol=newton_tol, newton_max_iter=newton_max_iter)
+        try:
+            self.settings = cont.CycleSettings(m=m, N=N, linear_solver=linear_solver, newton_tol=newton_tol,
+                                               newton_step_tol=newton_tol, newton_max_iter=newton_max_iter,
+                                               collocation=collocation)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
         self.params, self.omega = params, float(omega)
-        self.scheme = cont.Scheme(m)
+        self.scheme = cont.Scheme(m, collocation)
         problem = gfb_cycle_problem(params)
         cont.bind_solver(problem, self.scheme, self.settings)  # a bad solver fails here
         try:

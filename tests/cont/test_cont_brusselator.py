@@ -171,7 +171,7 @@ def test_cycle_branch_passes_its_branch_points_and_finds_every_torus():
             assert abs(s.lam - L_auto) <= s.lam_error + 1e-5, (s.lam, s.lam_error, L_auto)
         for s, L_tight in zip([s for s in br.special if s.type == "BPC"], AUTO_BPC_NX10_TIGHT):
             # The dense solver also places each across the gap where corrections fail, by the regular bordered
-            # test (_driver._across_the_gap): 1.3e-7 and 2.9e-7 from AUTO's tight values (the two tools' meshes
+            # test (_localise._across_the_gap): 1.3e-7 and 2.9e-7 from AUTO's tight values (the two tools' meshes
             # and phase conditions differ at that level), where the multiplier test alone was 2e-6 off.  The
             # sparse solver's GMRES does not converge for that test next to the branch point: its noise-widened
             # bracket (up to 7.5e-5) must cover AUTO's value instead.

@@ -103,3 +103,92 @@ def test_speed_settings_are_checked():
         SparseSweep(chord=1.5)
     with pytest.raises(ValueError, match="gmres_forcing"):
         SparseSweep(gmres_forcing=0.0)
+
+
+@pytest.mark.parametrize("cls, field, bad", [
+    (EquilibriumSettings, "dlam_max", True), (CycleSettings, "dlam_max", np.True_),
+    (EquilibriumSettings, "direction", 1.0), (CycleSettings, "direction", True), (CycleSettings, "direction", 0),
+    (EquilibriumSettings, "detect", "HOPF"), (EquilibriumSettings, "detect", ("HOPF", "LPC")),
+    (CycleSettings, "save_states", "yes"), (CycleSettings, "save_states", 1),
+    (EquilibriumSettings, "locate", "no"), (CycleSettings, "grow", True),
+    (EquilibriumSettings, "lam_min", float("nan")), (EquilibriumSettings, "lam_max", float("nan")),
+    (CycleSettings, "lam_min", float("inf")), (CycleSettings, "max_points", 10.0),
+    (CycleSettings, "N", 16.0), (EquilibriumSettings, "ds", float("nan")),
+])
+def test_every_settings_field_refuses_a_value_of_the_wrong_kind(cls, field, bad):
+    """Fresh-user cases: booleans for numbers, floats for orientations, strings for flags and a bare string for
+    the event list were accepted.  Each is refused at construction, naming the field."""
+    with pytest.raises(ValueError, match=field):
+        cls(**{field: bad})
+
+
+def test_numpy_numbers_and_lists_are_welcome_and_stored_plainly():
+    """NumPy scalars (the natural result of array arithmetic) are accepted everywhere an int or float is, and stored
+    as Python numbers; a list of events becomes a tuple, so that settings stay hashable."""
+    st = CycleSettings(N=np.int64(12), m=np.int32(3), grow=np.float64(1.2), ds=np.float32(0.25),
+                       detect=["NS", "PD", "NS"], direction=np.int64(-1))
+    assert (type(st.N), type(st.m), type(st.grow), type(st.direction)) == (int, int, float, int)
+    assert st.detect == ("NS", "PD") and st.direction == -1 and st.ds == 0.25
+    hash(st)
+    prob = CycleProblem(stuart_landau, np.int64(2), jnp.asarray(W), n_trivial=np.int64(1))
+    assert type(prob.n_trivial) is int and prob.n_trivial == 1
+    with pytest.raises(ValueError, match="n_trivial"):
+        CycleProblem(stuart_landau, 2, n_trivial=3)
+
+
+def test_a_start_outside_the_bounds_or_not_finite_is_refused():
+    """A start outside [lam_min, lam_max] used to be recorded and then the branch jumped to the bound (lam0 = 2,
+    lam_max = 1 gave the points 2.0 and 1.0); NaN starts ended with START_FAILED without naming the argument."""
+    line = EquilibriumProblem(lambda x, p, a: jnp.array([p - x[0]]), 1)
+    with pytest.raises(ValueError, match=r"lam0 = 2 lies outside .*\[-inf, 1\]"):
+        continue_equilibria(line, EquilibriumSettings(lam_max=1.0), np.array([2.0]), 2.0)
+    with pytest.raises(ValueError, match=r"lam0 = -3 lies outside"):
+        continue_equilibria(line, EquilibriumSettings(lam_min=-1.0, lam_max=1.0), np.array([-3.0]), -3.0)
+    with pytest.raises(ValueError, match="lam0 must be a number"):
+        continue_equilibria(line, EquilibriumSettings(), np.array([0.0]), float("nan"))
+    with pytest.raises(ValueError, match=r"x0 must be finite.*\[1\] = nan"):
+        continue_equilibria(EquilibriumProblem(stuart_landau, 2, jnp.asarray(W)), EquilibriumSettings(),
+                            np.array([0.0, np.nan]), 0.0)
+    # on the bound itself is inside
+    assert len(continue_equilibria(line, EquilibriumSettings(lam_max=1.0, max_points=3), np.array([1.0]), 1.0)) >= 1
+    st = CycleSettings(m=3, N=6, max_points=2, lam_max=0.2)
+    with pytest.raises(ValueError, match=r"the start's lam = 0.5 lies outside"):
+        continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W)), st, _sl_start(st))
+    st = CycleSettings(m=3, N=6, max_points=2)
+    start = _sl_start(st)
+    bad = type(start)(start.orbit.__class__(start.orbit.mesh, start.orbit.xm.at[2, 1].set(jnp.nan), start.orbit.xi,
+                                            start.orbit.T, start.orbit.lam), start.tangent, start.label)
+    with pytest.raises(ValueError, match="start orbit's xm must be finite"):
+        continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W)), st, bad)
+
+
+def test_a_vector_field_that_returns_nan_is_refused_or_ends_the_branch_with_a_reason():
+    """At the start it raised a bare LinAlgError from an SVD (the fold start's null tangent of a NaN Jacobian): now
+    a ValueError naming the components, before any work.  Past the start, the branch ends with the points before
+    it and the corrector's own outcome."""
+    nan_field = EquilibriumProblem(lambda x, p, a: jnp.array([p - x[0], x[1]]) * jnp.array([1.0, jnp.nan]), 2)
+    with pytest.raises(ValueError, match=r"NaN or inf at x0 \(lam = 0\), in components 1"):
+        continue_equilibria(nan_field, EquilibriumSettings(), np.zeros(2), 0.0)
+    st = CycleSettings(m=3, N=6, max_points=2)
+    nan_cycle = CycleProblem(lambda x, lam, a: stuart_landau(x, lam, a) / 0.0 * x[0], 2, jnp.asarray(W))
+    with pytest.raises(ValueError, match="NaN or inf at the start orbit's first node"):
+        continue_cycles(nan_cycle, st, _sl_start(st))
+    later = EquilibriumProblem(lambda x, p, a: jnp.where(p > 0.5, jnp.nan, 1.0) * jnp.array([p - x[0]]), 1)
+    br = continue_equilibria(later, EquilibriumSettings(ds=0.1), np.array([0.0]), 0.0)
+    assert br.outcome is Outcome.STEP_TOO_SMALL and "nonfinite" in br.message and br.lam.max() <= 0.5
+
+
+def test_an_event_not_localised_reports_the_step_in_lam_as_its_error():
+    """Review case: with locate off, the error of a Hopf point was the arclength step (0.86 in Omega_bar for a
+    step of 0.021 on a GFB branch).  It is the change of lam over the step that holds the event."""
+    prob = EquilibriumProblem(stuart_landau, 2, jnp.asarray(W))
+    br = continue_equilibria(prob, EquilibriumSettings(ds=0.07, max_points=12, locate=False), np.zeros(2), -0.3)
+    (h,) = br.special_of("HOPF")
+    assert h.localisation == "not localised" and br.lam[h.index - 1] < 0.0 <= br.lam[h.index]
+    assert h.lam_error == pytest.approx(br.lam[h.index] - br.lam[h.index - 1], rel=1e-12)
+
+
+def test_flags_and_orientations_accept_zero_dimensional_arrays():
+    st = EquilibriumSettings(direction=np.array(-1), locate=np.array(True), detect=[np.str_("HOPF")])
+    assert st.direction == -1 and type(st.direction) is int and st.locate is True and st.detect == ("HOPF",)
+    assert type(st.detect[0]) is str

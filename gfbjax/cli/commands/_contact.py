@@ -62,7 +62,8 @@ def contact_line(branch: Any, spec: Any) -> str:
 
 
 def accuracy_summary(branch: Any) -> dict[str, Any]:
-    """Why points of a cycle branch are flagged, count by count (trivial multiplier, mesh error, film contact)."""
+    """Why points of a cycle branch are flagged, count by count (trivial multiplier, mesh error, spurious
+    multipliers of unresolved fast modes, multipliers of modes the mesh does not resolve, film contact)."""
     def count(values: Any, tol: Any, above: bool = True) -> int:
         if values is None or tol is None:
             return 0
@@ -74,9 +75,17 @@ def accuracy_summary(branch: Any) -> dict[str, Any]:
             "max_trivial_error": float(np.nanmax(branch.trivial_error)) if len(branch) else None,
             "max_mesh_error": (float(np.nanmax(branch.mesh_error)) if branch.mesh_error is not None and len(branch)
                                else None),
+            "collocation": branch.collocation, "stiff_tol": branch.stiff_tol,
+            "max_stiff_modulus": (float(np.nanmax(branch.stiff_modulus)) if branch.stiff_modulus is not None
+                                  and len(branch) else None),
+            "multiplier_tol": branch.multiplier_tol,
+            "max_multiplier_error": (float(np.nanmax(branch.multiplier_error)) if branch.multiplier_error is not None
+                                     and len(branch) else None),
             "flagged_points": int(np.sum(branch.flagged)),
             "above_trivial_tol": count(branch.trivial_error, branch.accuracy_tol),
             "above_mesh_tol": count(branch.mesh_error, branch.mesh_tol),
+            "above_stiff_tol": count(branch.stiff_modulus, branch.stiff_tol),
+            "above_multiplier_tol": count(branch.multiplier_error, branch.multiplier_tol),
             "in_contact": count(branch.monitor, info.get("minimum"), above=False)}
 
 
@@ -84,11 +93,25 @@ def accuracy_line(acc: dict[str, Any]) -> str:
     line = f"  accuracy          max trivial error {acc['max_trivial_error']:.2e}"
     if acc["max_mesh_error"] is not None:
         line += f", max mesh error {acc['max_mesh_error']:.2e}"
-    why = [f"{acc['above_trivial_tol']} above trivial_tol = {acc['trivial_tol']:g}" if acc["above_trivial_tol"] else "",
-           f"{acc['above_mesh_tol']} above mesh_tol = {acc['mesh_tol']:g}" if acc["above_mesh_tol"] else "",
-           f"{acc['in_contact']} in film contact" if acc["in_contact"] else ""]
-    why = [w for w in why if w]
+    if acc.get("max_stiff_modulus") is not None and acc["max_stiff_modulus"] >= 1e-3:
+        # the multipliers the mesh gives the fast modes (exactly ~0): a band of artefacts up to this modulus
+        line += f", fast modes' spurious multipliers up to |mu| {acc['max_stiff_modulus']:.3f}"
+    if acc.get("max_multiplier_error") is not None:
+        line += f", max multiplier error {acc['max_multiplier_error']:.1e}"
+    if acc.get("collocation"):
+        line += f" ({acc['collocation']} points)"
+    # each cause with its own remedy
+    why = [(acc["above_trivial_tol"], f"above trivial_tol = {acc['trivial_tol']:g}", "refine --N"),
+           (acc["above_mesh_tol"], f"above mesh_tol = {acc['mesh_tol']:g}", "refine --N"),
+           (acc.get("above_stiff_tol", 0), f"with spurious multipliers above stiff_tol = {acc.get('stiff_tol')}",
+            "refine --N" if acc.get("collocation") == "radau" else "--collocation radau, or refine --N"),
+           (acc.get("above_multiplier_tol", 0),
+            f"with multipliers not resolved to multiplier_tol = {acc.get('multiplier_tol')}", "refine --N"),
+           (acc["in_contact"], "in film contact", "the model does not apply there")]
+    why = [(n, text, fix) for n, text, fix in why if n]
     if why:
-        line += (f"; {acc['flagged_points']} points flagged ({', '.join(why)}): their stability labels are "
-                 "unreliable (refine --N, or the model does not apply)")
+        count = acc["flagged_points"]
+        causes = ", ".join(f"{n} {text}: {fix}" for n, text, fix in why)
+        line += (f"; {count} point{'s' if count != 1 else ''} flagged ({causes}); their multipliers or stability "
+                 "labels are unreliable")
     return line

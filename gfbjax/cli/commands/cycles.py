@@ -71,6 +71,10 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="largest change of Omega_bar in one step (default 0.02)")
     n.add_argument("--max-points", type=int, default=200, metavar="P",
                    help="most points on the branch (default 200)")
+    n.add_argument("--collocation", choices=("gauss", "radau"), default="gauss",
+                   help="collocation points: gauss (default; order 2m, as AUTO and the paper) or radau "
+                        "(L-stable: the film's fast modes get multipliers near 0 instead of spurious ones near the "
+                        "unit circle, but modes oscillating faster than the mesh resolves are damped away)")
     n.add_argument("--no-locate", action="store_true",
                    help="do not locate the bifurcations (report the step where they were detected)")
     add_contact_options(p)
@@ -92,7 +96,8 @@ def _settings(args: argparse.Namespace):
     try:
         return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
                                       ds_max=args.ds_max, dlam_max=args.dlam_max, max_points=args.max_points,
-                                      locate=not args.no_locate, save_states=True)
+                                      locate=not args.no_locate, save_states=True,
+                                      collocation=args.collocation)
     except ValueError as exc:
         msg = str(exc)
         field = msg.split()[0] if msg else ""
@@ -123,7 +128,8 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
         lam = float(s.lam)
         d: dict[str, Any] = {
             "type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.period,
-            "located": bool(s.located), "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
+            "located": bool(s.located), "localisation": s.localisation,
+            "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
             # the estimated error of Omega_bar: the zero's move on the halved mesh (SpecialPoint.lam_error)
             "Omega_bar_error": None if math.isnan(s.lam_error) else s.lam_error,
             "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
@@ -139,7 +145,8 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
         if "ns_frequency_ratio" in d:
             si["ns_frequency_Hz"] = d["ns_frequency_ratio"] * si["running_frequency_Hz"]
         d["SI"] = {**si, **branch_row_um(branch, s.index, spec)}
-        d["flags"] = _row_flags(branch, s.index)
+        # an unlocated point's place and data are those of a bracket or of the next point, not of a zero
+        d["flags"] = ([] if s.located else [s.localisation]) + _row_flags(branch, s.index)
         out.append(d)
     return out
 
@@ -157,6 +164,12 @@ def _row_flags(branch: Any, i: int) -> list[str]:
         out.append("trivial error")
     if branch.mesh_error is not None and branch.mesh_tol is not None and float(branch.mesh_error[i]) > branch.mesh_tol:
         out.append("mesh error")
+    if (branch.stiff_modulus is not None and branch.stiff_tol is not None
+            and float(branch.stiff_modulus[i]) > branch.stiff_tol):
+        out.append("spurious multipliers")
+    if (branch.multiplier_error is not None and branch.multiplier_tol is not None
+            and float(branch.multiplier_error[i]) > branch.multiplier_tol):
+        out.append("multipliers unresolved")
     return out
 
 
@@ -164,14 +177,14 @@ def format_table(rows: list[dict[str, Any]]) -> str:
     if not rows:
         return "  special points    none"
     lines = ["  special points", f"    {'type':<5} {'Omega_bar':>10} {'+-':>8} {'rpm':>9}  "
-             f"{'|mu| (largest non-trivial)':<30} {'NS angle':>12}  located"]
+             f"{'|mu| (largest non-trivial)':<30} {'NS angle':>12}  {'placed':<13}"]
     for d in rows:
         mods = ", ".join(f"{v:.4f}" for v in d["multiplier_moduli"][:3])
         ang = f"{d['ns_angle_rad']:.4f} rad" if "ns_angle_rad" in d else ""
         flags = f"  FLAGGED: {', '.join(d['flags'])}" if d.get("flags") else ""
         err = d.get("Omega_bar_error")
         lines.append(f"    {d['type']:<5} {d['Omega_bar']:>10.5f} {'?' if err is None else f'{err:.1e}':>8} "
-                     f"{d['rpm']:>9.0f}  {mods:<30} {ang:>12}  {'yes' if d['located'] else 'no'}{flags}")
+                     f"{d['rpm']:>9.0f}  {mods:<30} {ang:>12}  {d['localisation']:<13}{flags}")
     return "\n".join(lines)
 
 

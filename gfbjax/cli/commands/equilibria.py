@@ -90,6 +90,7 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
     for s in branch.special:
         lam = float(s.lam)
         d: dict[str, Any] = {"type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "located": bool(s.located),
+                             "localisation": s.localisation,
                              "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
                              "Omega_bar_error": None if math.isnan(s.lam_error) else s.lam_error}
         ev = np.asarray(s.spectrum, complex)
@@ -156,11 +157,14 @@ def run(args: argparse.Namespace) -> int:
         if "omega_per_tau" in d:
             extra = (f", omega = {d['omega_per_tau']:.4f} per tau ({d['frequency_hz']:.1f} Hz), "
                      f"whirl ratio omega/Omega_bar = {d['whirl_ratio']:.3f}")
-        where = (f"located, test function {d['residual']:.1e}" if d["located"] else
-                 f"NOT located: the test function jumps there (by {d['residual']:.1e})" if d["residual"] is not None
-                 else "NOT located: values at the first point past it")
-        if d.get("Omega_bar_error") is not None:
-            where += f"; Omega_bar +- {d['Omega_bar_error']:.1e}"
+        err = d.get("Omega_bar_error")
+        pm = "" if err is None else f" +- {err:.1e}"
+        # a bracketed jump is placed as precisely as a zero, but it is no zero crossing: say which it is
+        where = {"located": f"located, test function {d['residual'] or 0.0:.1e}; Omega_bar{pm}",
+                 "bracketed": f"bracketed, NOT located: the test function jumps there (by {d['residual'] or 0.0:.1e}), "
+                              f"no zero crossing; the jump lies within Omega_bar{pm}",
+                 "not localised": f"not localised: reported at the first point past it; the event lies within "
+                                  f"Omega_bar{pm}"}[d["localisation"]]
         lines.append(f"  {d['type']:<17} Omega_bar = {d['Omega_bar']:.5f} ({d['rpm']:.0f} rpm){extra}  [{where}]")
     print("\n".join(lines), flush=True)
 
