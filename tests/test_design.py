@@ -89,3 +89,22 @@ def test_counts_and_bounds(params, dense):
     with pytest.raises(ParameterError, match="eta"):
         d.evaluate(0.1, 0.0)
     assert d.n_solves == n0 + 1  # rejected before any solve
+
+
+def test_max_mu_at_low_speed_is_flagged_where_the_mesh_does_not_resolve_it():
+    """At Omega_bar 0.1 the period is long and the rotor mode goes through about a cycle per mesh interval: on
+    the 16x2 grid N = 16 gives max|mu| = 0.283 (Gauss) where the cycle's is 0.247.  The independent reference:
+    the orbit is small at this speed, so the rotor pair's multiplier is exp(lam T) of the static equilibrium's
+    least damped eigenvalue.  The evaluation says so (``resolved`` False) at N = 16, and agrees at N = 64."""
+    from gfbjax import cont
+    from gfbjax.analyses.cycles import continue_gfb_equilibria
+
+    omega = 0.1
+    params = gfbjax.reference_system(Nx=16, Nz=2).nondim()
+    eq = continue_gfb_equilibria(params, omega, omega + 0.05, cont.EquilibriumSettings(max_points=1))
+    ev = eq.multipliers[0]
+    reference = float(np.max(np.abs(np.exp(ev * 2 * np.pi / omega))))
+    coarse = FoilDesign(params, omega, N=16).evaluate(float(params.alpha_f), float(params.eta))
+    fine = FoilDesign(params, omega, N=64).evaluate(float(params.alpha_f), float(params.eta))
+    assert not coarse.resolved and coarse.multiplier_error > 0.1 and abs(coarse.max_mu - reference) > 0.02
+    assert fine.resolved and abs(fine.max_mu - reference) < 1e-3

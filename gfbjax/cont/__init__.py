@@ -49,6 +49,7 @@ from ._linear import (DenseCondensation as DenseCondensation, Linearisation as L
 from ._newton import (LinearSolveError as LinearSolveError, NewtonSettings as NewtonSettings,
                       NewtonSolution as NewtonSolution, solve as newton_solve, solve_host as newton_solve_host)
 from ._problem import CycleProblem as CycleProblem, EquilibriumProblem as EquilibriumProblem, Monitor as Monitor
+from ._resolution import resolution as resolution
 from ._results import Outcome as Outcome, SPECIAL_TYPES as SPECIAL_TYPES, SpecialPoint as SpecialPoint
 from ._settings import (CycleSettings as CycleSettings, EquilibriumSettings as EquilibriumSettings,
                         Natural as Natural, PseudoArclength as PseudoArclength)
@@ -56,7 +57,7 @@ from ._sparsity import (Coloring as Coloring, color_pattern as color_pattern, de
                         jacobian_values as jacobian_values)
 
 __all__ = [
-    "Arnoldi", "BatchNewtonResult", "BlockKrylov", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
+    "resolution", "Arnoldi", "BatchNewtonResult", "BlockKrylov", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
     "CycleSettings", "CycleStart",
     "DenseCondensation", "EquilibriumProblem", "EquilibriumSettings", "FloquetMethod", "HopfPoint",
     "LinearSolveError", "LinearSolver", "Linearisation", "Natural", "NewtonSettings", "NewtonSolution", "Orbit",

@@ -51,13 +51,21 @@ def W_cb_of(orbit: Orbit, params: Params) -> jax.Array:
     return orbit_energy(orbit, params).W_cb
 
 
+#: the multiplier error above which an evaluation's max_mu is not resolved (``cont.CycleSettings.multiplier_tol``)
+MULTIPLIER_TOL = cont.CycleSettings().multiplier_tol
+
+
 @dataclass
 class CycleEvaluation:
     """One cycle at ``(alpha_f, eta)`` and speed ``omega`` (Omega_bar).
 
     energy: works per cycle [p0 R L c]; multipliers: Floquet multipliers (decreasing modulus; all of them with the
     dense solver, the leading ones (block Krylov) with the sparse one); max_mu: largest non-trivial modulus;
-    grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None."""
+    grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None.
+    stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.resolution``): with
+    ``multiplier_error`` above 1e-3 max_mu and its gradient are not those of the cycle (at low speed on N = 16
+    they are those of the film's fast modes, which collocation puts near the unit circle): raise N.  NaN: not
+    estimated."""
 
     alpha_f: float
     eta: float
@@ -70,6 +78,13 @@ class CycleEvaluation:
     newton_iterations: int
     grad_W_cb: np.ndarray | None = None
     grad_max_mu: np.ndarray | None = None
+    stiff_modulus: float = math.nan
+    multiplier_error: float = math.nan
+
+    @property
+    def resolved(self) -> bool:
+        """max_mu is resolved by the mesh (multiplier_error at most 1e-3; True where not estimated)."""
+        return not self.multiplier_error > MULTIPLIER_TOL
 
     @property
     def W_cb(self) -> float:
@@ -194,9 +209,12 @@ class FoilDesign:
         self.orbit = orbit
         mu = cont.analyse(problem, lin, self.settings.floquet, self._memo)["spectrum"]
         nt = cont.nontrivial(mu, problem.n_trivial)
+        stiff, mu_error = cont.resolution(problem.f, orbit, problem.args, self.scheme,
+                                          float(np.max(np.abs(nt), initial=0.0)))
         ev = CycleEvaluation(float(alpha_f), float(eta), self.omega, orbit,
                              CycleEnergy(*(float(w) for w in orbit_energy(orbit, p))), mu,
-                             float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(sol.iterations))
+                             float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(sol.iterations),
+                             stiff_modulus=stiff, multiplier_error=mu_error)
         if gradient and self.gradient_mode == "adjoint":
             self.n_gradients += 1
             g = cont.adjoint_gradient(problem, lin, self.scheme, W_cb_of)

@@ -191,12 +191,16 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
         f"({'stable' if ev.stable else 'unstable'})",
         f"  cost              {opt.n_solves} cycle solves, {opt.n_gradients} gradients, {opt.seconds:.1f} s "
         f"(stopped: {opt.reason})",
+        f"  accuracy          multiplier error {ev.multiplier_error:.1e} (frozen-coefficient estimate)"
+        + ("" if ev.resolved else f"; FLAGGED: max|mu| is not resolved at N = {args.N} (at low speed the film's "
+           "fast modes or the rotor mode): raise --N"),
     ]), flush=True)
     data = {
         **meta, "Omega_bar": args.speed, "rpm": spec.rpm(args.speed),
         "alpha_f": opt.alpha_f, "eta": opt.eta, "objective_value": opt.value, "W_cb": ev.W_cb,
         "W_cb_J": ev.W_cb * work_unit_J(spec), "running_frequency_Hz": speed_si(spec, args.speed)["running_frequency_Hz"],
         "max_mu": ev.max_mu, "stable": ev.stable, "energy": ev.energy._asdict(),
+        "multiplier_error": ev.multiplier_error, "stiff_modulus": ev.stiff_modulus, "max_mu_resolved": ev.resolved,
         "multiplier_moduli": mods[:8], "n_solves": opt.n_solves, "n_gradients": opt.n_gradients,
         "seconds": opt.seconds, "reason": opt.reason,
         "history": {"columns": ["alpha_f", "eta", args.objective, "seconds"], "rows": hist},
