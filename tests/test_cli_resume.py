@@ -193,3 +193,34 @@ def test_unlocated_special_points_are_flagged_in_the_table():
     assert [r["flags"] for r in rows] == [[], ["bracketed"], ["not localised"]]
     lines = format_table(rows).splitlines()[2:]
     assert "FLAGGED" not in lines[0] and "FLAGGED: bracketed" in lines[1] and "FLAGGED: not localised" in lines[2]
+
+
+def test_accuracy_line_gives_each_cause_its_own_remedy():
+    """Review case: the line always advised "--collocation radau", also on Radau runs and for multipliers that
+    Radau points make worse; it said "1 points"; a branch too large for the resolution estimate (all NaN) gave
+    NaN maxima with a warning."""
+    from types import SimpleNamespace
+
+    from gfbjax.cli.commands._contact import accuracy_line, accuracy_summary
+    from gfbjax.cont import Branch as RealBranch
+
+    class Rows(SimpleNamespace):
+        def __len__(self):
+            return len(self.lam)
+
+        flagged = property(lambda self: RealBranch.flagged.fget(self))
+
+    common = dict(lam=np.arange(3.0), trivial_error=np.full(3, 1e-9), accuracy_tol=1e-5, mesh_error=np.full(3, 1e-6),
+                  mesh_tol=1e-4, stiff_tol=0.9, multiplier_tol=1e-3, monitor=None, monitor_info=None)
+    gauss = Rows(**common, collocation="gauss", stiff_modulus=np.array([0.95, 0.2, 0.1]),
+                 multiplier_error=np.array([0.5, 2e-3, 1e-6]))
+    line = accuracy_line(accuracy_summary(gauss))
+    assert "2 points flagged" in line and "spurious multipliers up to |mu| 0.950" in line
+    assert "1 with spurious multipliers above stiff_tol = 0.9: --collocation radau, or refine --N" in line
+    assert "2 with multipliers not resolved to multiplier_tol = 0.001: refine --N" in line
+    radau = Rows(**common, collocation="radau", stiff_modulus=np.zeros(3), multiplier_error=np.array([2e-3, 0, 0]))
+    line = accuracy_line(accuracy_summary(radau))
+    assert "1 point flagged" in line and "radau" not in line.split("flagged")[1] and "spurious" not in line
+    big = Rows(**common, collocation="gauss", stiff_modulus=np.full(3, np.nan), multiplier_error=np.full(3, np.nan))
+    acc = accuracy_summary(big)
+    assert acc["max_multiplier_error"] is None and acc["max_stiff_modulus"] is None and "flagged" not in accuracy_line(acc)

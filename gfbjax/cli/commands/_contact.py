@@ -70,17 +70,20 @@ def accuracy_summary(branch: Any) -> dict[str, Any]:
         v = np.asarray(values, float)
         return int(np.sum(v > tol) if above else np.sum(v <= tol))
 
+    def largest(values: Any) -> float | None:
+        # None where nothing was estimated (an older file, an empty branch, or every value NaN: too large a
+        # problem for the resolution estimate)
+        v = None if values is None else np.asarray(values, float)
+        return None if v is None or not np.any(np.isfinite(v)) else float(np.nanmax(v))
+
     info = branch.monitor_info or {}
     return {"trivial_tol": branch.accuracy_tol, "mesh_tol": branch.mesh_tol,
-            "max_trivial_error": float(np.nanmax(branch.trivial_error)) if len(branch) else None,
-            "max_mesh_error": (float(np.nanmax(branch.mesh_error)) if branch.mesh_error is not None and len(branch)
-                               else None),
+            "max_trivial_error": largest(branch.trivial_error),
+            "max_mesh_error": largest(branch.mesh_error),
             "collocation": branch.collocation, "stiff_tol": branch.stiff_tol,
-            "max_stiff_modulus": (float(np.nanmax(branch.stiff_modulus)) if branch.stiff_modulus is not None
-                                  and len(branch) else None),
+            "max_stiff_modulus": largest(branch.stiff_modulus),
             "multiplier_tol": branch.multiplier_tol,
-            "max_multiplier_error": (float(np.nanmax(branch.multiplier_error)) if branch.multiplier_error is not None
-                                     and len(branch) else None),
+            "max_multiplier_error": largest(branch.multiplier_error),
             "flagged_points": int(np.sum(branch.flagged)),
             "above_trivial_tol": count(branch.trivial_error, branch.accuracy_tol),
             "above_mesh_tol": count(branch.mesh_error, branch.mesh_tol),
@@ -90,7 +93,8 @@ def accuracy_summary(branch: Any) -> dict[str, Any]:
 
 
 def accuracy_line(acc: dict[str, Any]) -> str:
-    line = f"  accuracy          max trivial error {acc['max_trivial_error']:.2e}"
+    line = "  accuracy          max trivial error " + ("-" if acc["max_trivial_error"] is None
+                                                       else f"{acc['max_trivial_error']:.2e}")
     if acc["max_mesh_error"] is not None:
         line += f", max mesh error {acc['max_mesh_error']:.2e}"
     if acc.get("max_stiff_modulus") is not None and acc["max_stiff_modulus"] >= 1e-3:
