@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import check_choices, check_flag, check_range, check_sign, store, store_range
+from ._checks import check_choices, check_flag, check_sign, store, store_range
 from ._collocation import COLLOCATION_POINTS
 from ._floquet import FloquetMethod
 from ._linear import LinearSolver
@@ -193,22 +193,24 @@ class CycleSettings(_StepSettings):
     multiplier_tol: float = 1e-3
 
     def __post_init__(self) -> None:
-        store(self, "m", check_range("m", self.m, 2, 7, integer=True))
-        store(self, "N", check_range("N", self.N, 2, 10**6, integer=True))
+        put = functools.partial(store_range, self)
+        put("m", 2, 7, integer=True)
+        put("N", 2, 10**6, integer=True)
         self._check_steps()
-        store(self, "newton_step_tol", check_range("newton_step_tol", self.newton_step_tol, 0.0, 1.0, lo_open=True))
+        put("newton_step_tol", 0.0, 1.0, lo_open=True)
         store(self, "detect", check_choices("detect", self.detect, ("LPC", "PD", "NS", "BPC")))
         if self.floquet is not None and not isinstance(self.floquet, FloquetMethod):
             raise ValueError(f"floquet must be PeriodicQR(), TransferProduct(), BlockKrylov(k), Arnoldi(k) or None, "
                              f"got {self.floquet!r}")
-        store(self, "trivial_tol", check_range("trivial_tol", self.trivial_tol, 0.0, 1.0, lo_open=True, hi_open=True))
-        store(self, "adapt", check_range("adapt", self.adapt, 0, 10**6, integer=True))
-        store(self, "mesh_tol", check_range("mesh_tol", self.mesh_tol, 0.0, 1.0, lo_open=True, hi_open=True))
+        put("trivial_tol", 0.0, 1.0, lo_open=True, hi_open=True)
+        put("adapt", 0, 10**6, integer=True)
+        put("mesh_tol", 0.0, 1.0, lo_open=True, hi_open=True)
         store(self, "save_states", check_flag("save_states", self.save_states))
-        if self.collocation not in COLLOCATION_POINTS:
+        if not isinstance(self.collocation, str) or self.collocation not in COLLOCATION_POINTS:
             raise ValueError(f"collocation must be one of {COLLOCATION_POINTS}, got {self.collocation!r}")
-        store(self, "stiff_tol", check_range("stiff_tol", self.stiff_tol, 0.0, 1.0, lo_open=True))
-        store(self, "multiplier_tol", check_range("multiplier_tol", self.multiplier_tol, 0.0, 1.0, lo_open=True))
+        store(self, "collocation", str(self.collocation))
+        put("stiff_tol", 0.0, 1.0, lo_open=True)
+        put("multiplier_tol", 0.0, 1.0, lo_open=True)
         if self.linear_solver is not None and not isinstance(self.linear_solver, LinearSolver):
             raise ValueError(f"linear_solver must be DenseCondensation(), SparseSweep(...) or None (automatic), "
                              f"got {self.linear_solver!r}")
