@@ -708,8 +708,10 @@ _ = fig.suptitle("grey: range computed; red triangle: first unstable point; diam
 
 Stability is lost between the last stable point and the first unstable one (a located special point is inserted
 as a point of its own). Points flagged (`Branch.flagged`; grey crosses in the diagrams, whose legend names only
-the trivial multiplier): cycles whose estimated mesh error is above the tolerance or whose trivial Floquet
-multiplier is off, i.e. the orbit and its stability label are less certain. On the coarse mesh (N = 8) that is
+the trivial multiplier): cycles whose estimated mesh error is above the tolerance, whose trivial Floquet
+multiplier is off, or whose multipliers the mesh does not resolve (`Branch.multiplier_error`,
+`Branch.stiff_modulus`: at low speed the film's fast modes and the rotor mode), i.e. the orbit, its multipliers or
+its stability label are less certain. On the coarse mesh (N = 8) that is
 most cycles of the paper preset, whose large orbits it does not resolve.
 '''),
     code('''

@@ -143,7 +143,7 @@ def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"),
             if several:
                 _overlay_legend(a, blabel, colour)
             flagged = np.asarray(b.flagged, bool)
-            if flagged.any():  # stability labels that the accuracy (trivial multiplier, mesh) or the film do not support
+            if flagged.any():  # points whose accuracy (trivial multiplier, mesh, unresolved multipliers) or film is in doubt
                 key = "flagged (accuracy or contact)"
                 a.plot(lam[flagged], np.asarray(b.xmax, float)[flagged, k], "x", color="0.4", ms=6, zorder=4,
                        label=key if key not in seen else None)
