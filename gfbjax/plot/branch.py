@@ -143,7 +143,7 @@ def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"),
             if several:
                 _overlay_legend(a, blabel, colour)
             flagged = np.asarray(b.flagged, bool)
-            if flagged.any():  # points whose accuracy (trivial multiplier, mesh, unresolved multipliers) or film is in doubt
+            if flagged.any():  # accuracy (trivial multiplier, mesh, multipliers) or film in doubt
                 key = "flagged (accuracy or contact)"
                 a.plot(lam[flagged], np.asarray(b.xmax, float)[flagged, k], "x", color="0.4", ms=6, zorder=4,
                        label=key if key not in seen else None)
