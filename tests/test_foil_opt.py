@@ -7,6 +7,7 @@ intermittently, see gfbjax/design/maps.py.)
 """
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import gfbjax
@@ -43,5 +44,8 @@ def test_optimized_continuation_records_and_stops(smooth):
     assert all(s.stable) and s.bifurcation_free_to == pytest.approx(0.4)
     assert s.outcome is Outcome.REACHED_END, s.message
     assert len(s.alpha_f) == len(s.W_cb) == len(s.multipliers) == 3
+    # each optimum carries the mesh's resolution of its multipliers (README, "Fast and unresolved modes")
+    assert len(s.multiplier_error) == 3 and all(np.isfinite(s.multiplier_error))
+    assert s.to_dict()["max_mu_resolved"] == [e <= 1e-3 for e in s.multiplier_error]
     with pytest.raises(ParameterError, match="d_omega"):
         optimized_continuation(smooth, 0.3, 0.4, 0.0)

@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..cont import LinearSolver, Outcome
-from .evaluate import FOIL_BOUNDS, CycleEvaluation, CycleNotConverged, FoilDesign, check_foil
+from .evaluate import FOIL_BOUNDS, MULTIPLIER_TOL, CycleEvaluation, CycleNotConverged, FoilDesign, check_foil
 from .optimizers import minimize_bounded, minimize_log_box, pattern_search
 from .predictor import OptimumTrail
 from .quasi_newton import minimize_cold, minimize_warm
@@ -158,7 +158,9 @@ class Schedule:
     says why the march ended (``REACHED_END``, ``UNSTABLE``: an optimised cycle is unstable, ``NO_SOLUTION``: no
     cycle converged, ``INTERRUPTED``) and ``message`` gives the details; ``bifurcation_free_to`` is the last
     speed with a stable optimised cycle.  Per speed also the cycle solves spent there (``n_solves_per_speed``,
-    failed and fallback solves included) and the optimiser's stopping rule (``stop_reasons``)."""
+    failed and fallback solves included), the optimiser's stopping rule (``stop_reasons``) and the optimum's
+    :attr:`~.evaluate.CycleEvaluation.multiplier_error` (``multiplier_error``; ``max_mu_resolved`` says where it
+    is at most 1e-3: elsewhere, at low speed on N = 16, max|mu| is not the cycle's)."""
 
     objective: str
     method: str
@@ -173,11 +175,17 @@ class Schedule:
     multipliers: list[np.ndarray] = field(default_factory=list)
     n_solves_per_speed: list[int] = field(default_factory=list)
     stop_reasons: list[str] = field(default_factory=list)
+    multiplier_error: list[float] = field(default_factory=list)
     n_solves: int = 0
     n_gradients: int = 0
     seconds: float = 0.0
     outcome: Outcome = Outcome.INTERRUPTED
     message: str = ""
+
+    @property
+    def max_mu_resolved(self) -> list[bool]:
+        """Per speed: the mesh resolves max|mu| (multiplier_error at most 1e-3, or not estimated)."""
+        return [not e > MULTIPLIER_TOL for e in self.multiplier_error]
 
     @property
     def bifurcation_free_to(self) -> float | None:
@@ -196,6 +204,7 @@ class Schedule:
                 "multipliers_re": [np.real(a).tolist() for a in self.multipliers],
                 "multipliers_im": [np.imag(a).tolist() for a in self.multipliers],
                 "n_solves_per_speed": self.n_solves_per_speed, "stop_reasons": self.stop_reasons,
+                "multiplier_error": self.multiplier_error, "max_mu_resolved": self.max_mu_resolved,
                 "n_solves": self.n_solves, "n_gradients": self.n_gradients, "seconds": self.seconds,
                 "outcome": str(self.outcome), "message": self.message,
                 "bifurcation_free_to": self.bifurcation_free_to}
@@ -293,6 +302,7 @@ def optimized_continuation(params: Params, omega_start: float, omega_end: float,
             sched.multipliers.append(np.asarray(ev.multipliers))
             sched.n_solves_per_speed.append(design.n_solves - n_before)
             sched.stop_reasons.append(opt.reason)
+            sched.multiplier_error.append(float(ev.multiplier_error))
             if bar is not None:
                 bar.update(1)
                 bar.set_postfix(alpha_f=f"{opt.alpha_f:.3g}", eta=f"{opt.eta:.3g}", max_mu=f"{ev.max_mu:.4f}")

@@ -221,9 +221,11 @@ def _continuation(args, spec, params, x0, options, out, meta, t0) -> int:
                                    method=args.method, x0=x0, m=args.m, N=args.N, progress=not args.quiet,
                                    **options)
     lines = [f"    {'Omega_bar':>9} {'alpha_f':>10} {'eta':>10} {'W_cb':>11} {'max|mu|':>9}  stable"]
-    for row in zip(sched.omega, sched.alpha_f, sched.eta, sched.W_cb, sched.max_mu, sched.stable):
-        w, a, e, wcb, mu, st = row
-        lines.append(f"    {w:>9.4f} {a:>10.4g} {e:>10.4g} {wcb:>11.4g} {mu:>9.5f}  {'yes' if st else 'no'}")
+    for row in zip(sched.omega, sched.alpha_f, sched.eta, sched.W_cb, sched.max_mu, sched.stable,
+                   sched.max_mu_resolved):
+        w, a, e, wcb, mu, st, ok = row
+        flag = "" if ok else f"  FLAGGED: max|mu| not resolved at N = {args.N} (raise --N)"
+        lines.append(f"    {w:>9.4f} {a:>10.4g} {e:>10.4g} {wcb:>11.4g} {mu:>9.5f}  {'yes' if st else 'no '}{flag}")
     free = sched.bifurcation_free_to
     print("\n".join([
         "  schedule", *lines,
