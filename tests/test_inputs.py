@@ -346,3 +346,20 @@ def test_a_system_spec_where_params_are_expected_is_a_clear_error():
         FoilDesign(spec, 0.2)
     with pytest.raises(ParameterError, match="Params"):
         FoilDesign({"alpha_f": 0.1}, 0.2)
+
+
+def test_equilibria_keep_the_settings_bounds_inside_the_range(small_params):
+    """continue_gfb_equilibria replaced the settings' speed bounds by the range, so a lam_max of 0.3 with the
+    range 0.2 -> 0.5 ran on to 0.5 (review list of issue 12); cycles already kept the narrower bound.  Now the
+    branch ends on 0.3, and a start outside the settings' bounds is refused before any work."""
+    from gfbjax import cont
+    from gfbjax.analyses.cycles import continue_gfb_cycles, continue_gfb_equilibria, default_cycle_settings
+
+    settings = cont.EquilibriumSettings(lam_max=0.3, max_points=40)
+    br = continue_gfb_equilibria(small_params, 0.2, 0.5, settings)
+    assert float(np.max(br.lam)) == pytest.approx(0.3, abs=1e-12)
+    assert str(br.outcome) == str(cont.Outcome.REACHED_END)
+    with pytest.raises(ParameterError, match="omega_start = 0.35 lies outside"):
+        continue_gfb_equilibria(small_params, 0.35, 0.5, settings)
+    with pytest.raises(ParameterError, match="omega_start = 0.35 lies outside"):
+        continue_gfb_cycles(small_params, 0.35, 0.5, default_cycle_settings(lam_max=0.3))

@@ -236,6 +236,18 @@ def _check_speed_range(params: Params, omega_start: float, omega_end: float) -> 
     return omega_start, omega_end
 
 
+def _within_range(settings: Any, omega_start: float, omega_end: float) -> Any:
+    """``settings`` (cycles or equilibria) bounded by the speed range and heading from ``omega_start`` to
+    ``omega_end``.  Bounds of the settings inside the range stay in force (the branch ends at them); ParameterError
+    when ``omega_start`` lies outside them, before any work."""
+    if not settings.lam_min <= omega_start <= settings.lam_max:
+        raise ParameterError(f"omega_start = {omega_start:g} lies outside the settings' speed bounds [lam_min, "
+                             f"lam_max] = [{settings.lam_min:g}, {settings.lam_max:g}]; start inside them or widen them")
+    lo, hi = sorted((omega_start, omega_end))
+    return dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
+                               direction=1 if omega_end > omega_start else -1)
+
+
 def _check_size(problem: cont.CycleProblem, settings: cont.CycleSettings) -> None:
     """The engine's size checks (memory of the collocation system, Floquet method) as a ParameterError."""
     try:
@@ -274,13 +286,7 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
                              "and start cycles from its Hopf point")
-    settings = settings or default_cycle_settings()
-    lo, hi = sorted((omega_start, omega_end))
-    direction = 1 if omega_end > omega_start else -1
-    import dataclasses
-
-    settings = dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
-                                   direction=direction)
+    settings = _within_range(settings or default_cycle_settings(), omega_start, omega_end)
     meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast
     problem = gfb_cycle_problem(params, monitor)
     _check_size(problem, settings)
@@ -343,22 +349,16 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
 
     The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``), and
     ``checkpoint``, ``h_rub`` and ``on_contact`` (the film thickness of each equilibrium) work as there; ``kw``
-    goes to :func:`gfbjax.cont.continue_equilibria` (``callback``,
-    ``progress``)."""
+    goes to :func:`gfbjax.cont.continue_equilibria` (``callback``, ``progress``).  ``settings`` may omit the speed
+    bounds; bounds it sets inside the range narrow it (the branch ends at them).  The start must lie inside them
+    (ValueError otherwise)."""
     omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
     monitor = film_monitor(h_rub, on_contact)
     meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
+    settings = _within_range(settings or cont.EquilibriumSettings(), omega_start, omega_end)
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:
         raise NoSolutionError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")
-    settings = settings or cont.EquilibriumSettings()
-    import dataclasses
-
-    lo, hi = sorted((omega_start, omega_end))
-    fields = {f.name for f in dataclasses.fields(settings)}
-    upd = {k: v for k, v in (("lam_min", lo), ("lam_max", hi),
-                             ("direction", 1 if omega_end > omega_start else -1)) if k in fields}
-    settings = dataclasses.replace(settings, **upd)
     branch = cont.continue_equilibria(gfb_equilibrium_problem(params, monitor), settings, eq.state, omega_start,
                                       checkpoint=_checkpoint(checkpoint, meta, omega_start, omega_end,
                                                              monitor.describe()), **kw)

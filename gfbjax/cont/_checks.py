@@ -1,7 +1,8 @@
 """Checks of the engine's inputs, each kind written once: numbers in a range, flags, orientations, choices from a
-set, and the start of a branch.  Every settings class, problem, solver and entry point of :mod:`gfbjax.cont`
-uses these, so that a value is refused the same way wherever it is given, before any work, by a ``ValueError``
-that names the field, the value and what is allowed.
+set, indices into a branch's points, and the start of a branch (down to every node of a start orbit).  Every
+settings class, problem, solver and entry point of :mod:`gfbjax.cont` uses these, so that a value is refused the
+same way wherever it is given, before any work, by a ``ValueError`` that names the field, the value and what is
+allowed.
 
 Values are also normalised: NumPy scalars become Python numbers and a list of choices a tuple, so that frozen
 settings stay hashable and print the way they were meant (``grow=1.2``, not ``grow=np.float64(1.2)``).
@@ -10,13 +11,15 @@ orientation (``direction=1.0`` is refused), because such values are almost alway
 """
 from __future__ import annotations
 
+import functools
 import numbers
 from typing import Any, Iterable
 
 import numpy as np
 
-__all__ = ["check_range", "check_flag", "check_sign", "check_choices", "check_field_at", "check_mesh", "check_finite",
-           "check_start", "store", "store_range"]
+__all__ = ["check_range", "check_flag", "check_sign", "check_choices", "check_index", "check_field_at",
+           "check_field_at_nodes", "check_mesh", "check_finite", "check_located_state", "check_nodes", "check_start", "store",
+           "store_range"]
 
 
 def _is_bool(value: Any) -> bool:
@@ -77,6 +80,21 @@ def check_choices(name: str, value: Any, allowed: Iterable[str]) -> tuple[str, .
     return tuple(dict.fromkeys(str(v) for v in value))
 
 
+def check_index(name: str, value: Any, count: int, items: str, where: str = "the branch") -> int:
+    """``value`` as an index in [0, count) into the ``count`` ``items`` of ``where``; negative values count from
+    the end, as in Python.  ``ValueError`` naming ``name``, how many items there are and the allowed range, for an
+    index outside [-count, count), a float or a bool (True would silently pick item 1), and for any index when
+    there are no items; ``where`` names the container in the message (default ``"the branch"``)."""
+    value = _scalar(value)
+    plural = items if count == 1 else items + "s"
+    if count == 0:
+        raise ValueError(f"{name} = {value!r} cannot index {where}: it has no {plural}")
+    if _is_bool(value) or not isinstance(value, numbers.Integral) or not -count <= value < count:
+        raise ValueError(f"{name} must be an int in [{-count}, {count - 1}] ({where} has {count} {plural}), "
+                         f"got {value!r}")
+    return int(value) % count
+
+
 def check_mesh(name: str, mesh: Any) -> np.ndarray:
     """A collocation mesh as a float array; ``ValueError`` naming ``name`` unless it runs from 0 to 1, strictly
     increasing, with at least 2 intervals (a start on another mesh would converge to a wrong period)."""
@@ -90,8 +108,11 @@ def check_mesh(name: str, mesh: Any) -> np.ndarray:
 
 
 def check_finite(name: str, values: Any) -> np.ndarray:
-    """``values`` as a float array; ``ValueError`` naming the first non-finite entries (NaN or inf)."""
-    arr = np.asarray(values, dtype=float)
+    """``values`` as a float array (complex ones stay complex); ``ValueError`` naming the first non-finite entries
+    (NaN or inf)."""
+    arr = np.asarray(values)
+    # a cast to float would drop the imaginary part of an eigenvector, with only a warning
+    arr = arr.astype(complex if np.iscomplexobj(arr) else float, copy=False)
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         shown = ", ".join(f"[{int(i)}] = {arr.flat[i]}" for i in bad[:5]) + (" ..." if bad.size > 5 else "")
@@ -110,6 +131,70 @@ def check_field_at(f: Any, x: Any, lam: float, args: Any, where: str) -> None:
         shown = ", ".join(str(int(i)) for i in bad[:5]) + (" ..." if bad.size > 5 else "")
         raise ValueError(f"f(x, lam, args) is NaN or inf at {where} (lam = {lam:g}), in components {shown}: check "
                          "the vector field and the start")
+
+
+def _node_report(bad: np.ndarray, times: np.ndarray, mesh: np.ndarray) -> tuple[str, str, str]:
+    """Where the earliest flagged node lies (``bad`` (K, n), at ``times`` (K,) on ``mesh``), how many more are
+    flagged, and the flagged components of the earliest one: the three parts of a node message."""
+    rows = np.flatnonzero(bad.any(axis=1))
+    first = rows[np.argmin(times[rows])]
+    t = float(times[first])
+    j = int(np.searchsorted(mesh, t, side="right")) - 1
+    if mesh[j] == t:
+        place = f"{'first node' if t == mesh[0] else 'node'} t = {t:.4g} (mesh[{j}])"
+    else:
+        place = f"node t = {t:.4g} (in mesh interval [mesh[{j}], mesh[{j + 1}]] = [{mesh[j]:.4g}, {mesh[j + 1]:.4g}])"
+    more = f", and at {rows.size - 1} more of its {len(times)} nodes" if rows.size > 1 else ""
+    comps = np.flatnonzero(bad[first])
+    return place, more, ", ".join(str(int(c)) for c in comps[:5]) + (" ..." if comps.size > 5 else "")
+
+
+def check_nodes(name: str, values: Any, times: Any, mesh: Any) -> None:
+    """``ValueError`` when states at nodes of an orbit are NaN or inf: ``values`` (K, n) at the scaled times
+    ``times`` (K,) in [0, 1] on the collocation ``mesh``.  The message names ``name``, the earliest such node by
+    its time and its mesh point or interval, its components and how many nodes are affected (a flat index into an
+    (N, m-1, n) array says none of this)."""
+    arr = np.asarray(values, float)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        place, more, comps = _node_report(bad, np.asarray(times, float), np.asarray(mesh, float))
+        raise ValueError(f"{name} must be finite; it is NaN or inf at its {place}, in components {comps}{more}")
+
+
+@functools.cache
+def _field_on_rows() -> Any:
+    import jax
+
+    # f static: compiled once per vector field, like the engine's own kernels
+    return jax.jit(lambda f, X, lam, args: jax.vmap(lambda x: f(x, lam, args))(X), static_argnums=0)
+
+
+def check_field_at_nodes(f: Any, nodes: Any, times: Any, mesh: Any, lam: float, args: Any, where: str) -> None:
+    """:func:`check_field_at` at every node of an orbit (``nodes`` (K, n) at the scaled ``times`` (K,) on
+    ``mesh``; ``where`` names the orbit), in one compiled, vmapped evaluation: ``ValueError`` naming the earliest
+    node where f is NaN or inf, by its time and mesh point or interval, its components and how many nodes are
+    affected.  A field that fails on part of an orbit only passes a check at its first node, and Newton then
+    fails there with nothing to say why."""
+    import jax.numpy as jnp
+
+    out = np.asarray(_field_on_rows()(f, jnp.asarray(nodes, float), lam, args), float)
+    bad = ~np.isfinite(out)
+    if bad.any():
+        place, more, comps = _node_report(bad, np.asarray(times, float), np.asarray(mesh, float))
+        raise ValueError(f"f(x, lam, args) is NaN or inf at {where}'s {place}, in components {comps}{more} (lam = "
+                         f"{lam:g}): check the vector field and the start")
+
+
+def check_located_state(branch: Any, point: Any, advice: str) -> dict:
+    """The stored state of the special ``point`` of ``branch``, to start from; ``ValueError`` when the point was not
+    located (its state is then not the bifurcation: ``advice`` says what to do) or has no stored state."""
+    if not point.located:
+        raise ValueError(f"the {point.type} point near lam = {point.lam:.6g} was not located ({point.localisation}): "
+                         f"its state is not the bifurcation; {advice}")
+    if not (isinstance(point.state, numbers.Integral) and 0 <= point.state < len(branch.special_states)):
+        raise ValueError(f"the {point.type} point near lam = {point.lam:.6g} has no stored state in branch (state = "
+                         f"{point.state!r}, {len(branch.special_states)} stored)")
+    return branch.special_states[point.state]
 
 
 def check_start(settings: Any, lam0: Any, name: str = "lam0") -> float:

@@ -18,7 +18,8 @@ import numpy as np
 
 from . import _collocation as col
 from ._branch import Branch, PointRecord
-from ._checks import check_field_at, check_finite, check_mesh, check_range, check_start
+from ._checks import (check_field_at_nodes, check_finite, check_index, check_located_state, check_mesh, check_nodes,
+                      check_range, check_start)
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (classify, crossed_multipliers, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
@@ -27,6 +28,7 @@ from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._newton import LinearSolveError
+from ._results import SpecialPoint
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
 from ._resolution import resolution
@@ -74,13 +76,29 @@ def start_from_hopf(hopf: Any, settings: CycleSettings) -> CycleStart:
     """From a Hopf point (``lam, x, omega, v``): x(t) = x0 + a Re(v e^{2 pi i t}).
 
     The start is the stationary orbit x0 with T = 2 pi / omega; the tangent is the normalised first harmonic
-    Re(v e^{2 pi i t}) (lam, T components 0, the Hopf bifurcation being a pitchfork in the amplitude a)."""
+    Re(v e^{2 pi i t}) (lam, T components 0, the Hopf bifurcation being a pitchfork in the amplitude a).
+    ``ValueError`` naming the field when ``omega`` is not a positive number, ``lam`` not finite, ``x`` not a finite
+    vector, or ``v`` not finite, not of the shape of ``x``, or zero."""
+    if not isinstance(settings, CycleSettings):
+        raise ValueError(f"settings must be CycleSettings, got {type(settings).__name__}")
+    missing = [k for k in ("lam", "x", "omega", "v") if not hasattr(hopf, k)]
+    if missing:
+        raise ValueError(f"hopf must be a Hopf point with lam, x, omega and v (see hopf_point); this "
+                         f"{type(hopf).__name__} has no {', '.join(missing)}")
+    omega = check_range("hopf.omega", hopf.omega, 0, np.inf, lo_open=True, hi_open=True)
+    lam = check_range("hopf.lam", hopf.lam, -np.inf, np.inf, lo_open=True, hi_open=True)
+    x0 = check_finite("hopf.x", hopf.x)
+    if x0.ndim != 1 or x0.size == 0:
+        raise ValueError(f"hopf.x must be a vector (the equilibrium's state), got shape {x0.shape}")
+    v = check_finite("hopf.v", hopf.v).astype(complex)
+    if v.shape != x0.shape:
+        raise ValueError(f"hopf.v must have the shape of hopf.x, {x0.shape}, got {v.shape}")
+    if not np.any(v):  # its normalisation would divide by zero: a start without a direction
+        raise ValueError("hopf.v must not be zero (the critical eigenvector gives the direction of the cycles)")
     sch = col.Scheme(settings.m, settings.collocation)
     mesh = col.uniform_mesh(settings.N)
-    x0 = np.asarray(hopf.x, float)
-    v = np.asarray(hopf.v, complex)
-    T = 2 * np.pi / float(hopf.omega)
-    base = col.orbit_from_function(lambda t: np.tile(x0, (len(t), 1)), T, hopf.lam, sch, mesh)
+    T = 2 * np.pi / omega
+    base = col.orbit_from_function(lambda t: np.tile(x0, (len(t), 1)), T, lam, sch, mesh)
     phi = col.orbit_from_function(lambda t: np.real(v[None, :] * np.exp(2j * np.pi * t)[:, None]),
                                   0.0, 0.0, sch, mesh)
     phi = phi.scale(1.0 / float(jnp.sqrt(col.inner(phi, phi, sch))))
@@ -95,19 +113,60 @@ def _orbit_of(st: dict[str, np.ndarray], index: int | None = None) -> col.Orbit:
                      jnp.asarray(pick(st["T"])), jnp.asarray(pick(st["lam"])))
 
 
+def _check_cycle_branch(branch: Any) -> None:
+    if not isinstance(branch, Branch):
+        raise ValueError(f"branch must be a Branch, got {type(branch).__name__}")
+    if branch.kind != "cycles":  # an equilibrium's state has no mesh, period or orbit to start from
+        raise ValueError(f"branch must be a branch of cycles, got a branch of kind {branch.kind!r}")
+
+
 def start_from_branch(branch: Branch, index: int) -> CycleStart:
-    """From a stored point of a branch computed with ``save_states=True``."""
+    """From the stored point ``index`` of a branch of cycles computed with ``save_states=True``; a negative
+    ``index`` counts from the end, as in Python (-1: the last point).  ``ValueError`` for a branch of equilibria,
+    one without stored states, and an index that is not an int in [-len(branch), len(branch) - 1]."""
+    _check_cycle_branch(branch)
     if branch.states is None:
         raise ValueError("branch has no stored states (use CycleSettings(save_states=True))")
+    index = check_index("index", index, len(branch), "point")
     return CycleStart(_orbit_of(branch.states, index), None, f"branch[{index}]")
+
+
+def _pd_point(branch: Branch, special: Any) -> SpecialPoint:
+    """The PD record that ``special`` designates, checked to be located and to have its state in ``branch``."""
+    if isinstance(special, SpecialPoint):
+        sp = special
+        if sp.type != "PD":
+            raise ValueError(f"special must be a PD point, got a point of type {sp.type!r} (near lam = {sp.lam:.6g})")
+    elif isinstance(special, (int, np.integer)) and not isinstance(special, (bool, np.bool_)):
+        pds = branch.special_of("PD")
+        sp = pds[check_index("special", special, len(pds), "PD point")]
+    else:
+        raise ValueError(f"special must be an int index among the branch's PD points or a SpecialPoint, got "
+                         f"{special!r}")
+    check_located_state(branch, sp, "the switch would start off the new branch; refine the steps")
+    return sp
 
 
 def start_from_pd(problem: CycleProblem, branch: Branch, special: Any,
                   settings: CycleSettings | None = None) -> CycleStart:
     """Switch onto the period-doubled branch at a located PD point of ``branch`` (``special``: index among the
-    branch's PD points, or the :class:`SpecialPoint`); transfer matrices from the linear solver of ``settings``."""
-    sp = branch.special_of("PD")[special] if isinstance(special, int) else special
+    branch's PD points, negative from the end, or the :class:`SpecialPoint`); transfer matrices from the linear
+    solver of ``settings``.  ``ValueError`` before any work for a branch of equilibria, an index outside the
+    branch's PD points, a point that is not a located PD point with a stored state, and a problem whose state
+    count is not the branch's."""
+    if not isinstance(problem, CycleProblem):
+        raise ValueError(f"problem must be a CycleProblem, got {type(problem).__name__}")
+    if settings is not None and not isinstance(settings, CycleSettings):
+        raise ValueError(f"settings must be CycleSettings or None, got {type(settings).__name__}")
+    _check_cycle_branch(branch)
+    sp = _pd_point(branch, special)
     o = _orbit_of(branch.special_states[sp.state])
+    if o.n != problem.n:
+        raise ValueError(f"problem.n = {problem.n}, but the branch's cycles have {o.n} states: pass the problem "
+                         "the branch was computed with")
+    if branch.m is None:
+        raise ValueError("branch.m (the collocation degree of its cycles) is not recorded: the PD orbit cannot be "
+                         "read back")
     sch = col.Scheme(int(branch.m), branch.collocation or "gauss")
     G = bind_solver(problem, sch, settings).linearise(o).transfer_matrices()
     doubled, direction = double_orbit_pd(problem.f, problem.args, o, sch, np.asarray(G))
@@ -170,15 +229,44 @@ def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleS
     check_cycle_size(problem, orbit.N, int(orbit.xi.shape[1]) + 1, settings)
 
 
+def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, what: str) -> None:
+    """ValueError naming ``what`` when the orbit is no place to start Newton from: a mesh that is not one, a
+    period or parameter that is not finite, a state that is NaN or inf at any node, or a vector field that is NaN
+    or inf at any node (all nodes in one compiled call; at the first one only, a field that fails on part of the
+    orbit would end the correction with no reason given).  After :func:`check_cycle_inputs` (the shapes)."""
+    mesh = check_mesh(f"{what}'s mesh", orbit.mesh)
+    for name in ("T", "lam"):
+        check_finite(f"{what}'s {name}", getattr(orbit, name))
+    n = orbit.n
+    inner = col.node_times(mesh, scheme)[:, 1:-1].ravel()
+    xi = orbit.xi.reshape(-1, n)
+    check_nodes(f"{what}'s xm", orbit.xm, mesh, mesh)
+    check_nodes(f"{what}'s xi", xi, inner, mesh)
+    check_field_at_nodes(problem.f, jnp.concatenate([orbit.xm, xi]), np.concatenate([mesh, inner]), mesh,
+                         float(orbit.lam), problem.args, what)
+
+
 def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,
                   settings: CycleSettings | None = None) -> tuple[Any, Linearisation | None]:
     """Correct one orbit with the linear solver and Newton tolerances of ``settings`` (default
     ``CycleSettings()``): at fixed lam = ``orbit.lam`` with phase reference ``orbit`` unless ``con`` is given.
     Returns the :class:`NewtonSolution` (``x`` the orbit, ``aux`` the unit tangent) and the linearisation at
-    the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives."""
+    the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives.
+    Raises ``ValueError`` before any work when the inputs do not fit together (:func:`check_cycle_inputs`) or the
+    orbit is not finite (mesh, T, lam, states) or f is NaN or inf at any of its nodes (the message names the
+    node's scaled time and components)."""
+    if not isinstance(problem, CycleProblem):
+        raise ValueError(f"problem must be a CycleProblem, got {type(problem).__name__}")
+    if not isinstance(orbit, col.Orbit):
+        raise ValueError(f"orbit must be an Orbit, got {type(orbit).__name__}")
+    if settings is not None and not isinstance(settings, CycleSettings):
+        raise ValueError(f"settings must be CycleSettings or None, got {type(settings).__name__}")
+    if con is not None and not isinstance(con, col.Constraint):
+        raise ValueError(f"con must be a Constraint or None, got {type(con).__name__}")
     s = settings or CycleSettings()
     check_cycle_inputs(problem, orbit, s)
     scheme = col.Scheme(int(orbit.xi.shape[1]) + 1, s.collocation)
+    _check_orbit(problem, orbit, scheme, "the orbit")
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
 
@@ -362,12 +450,21 @@ class CycleCurve(Curve):
         return np.asarray(w.to_flat())
 
     def other_discretisations(self, X, tau):
-        # Every interval halved.  Not another mesh of the same N: near an equidistributed mesh (the optimum) any
-        # such mesh changes the error only to second order, and a uniform mesh moved by part of an interval is
-        # the same discretisation up to a time shift.  The solver's kernels compile once more for 2N.
+        # Two, because each misses what the other sees.
+        # - Every interval halved (the solver's kernels compile once more for 2N).  Where the error does not
+        #   depend on where the mesh nodes fall on the orbit (a symmetric orbit, a smooth field), the staggered
+        #   mesh below is the same discretisation and would report nothing.
+        # - The mesh staggered by half an interval (nodes at the old midpoints, the orbit moved with them; same
+        #   N, same kernels).  With a kink in f (the bearing's max(p - 1, 0)) the error depends on where the
+        #   kinks fall between the nodes and falls erratically with N, so halving can report a fraction of it:
+        #   the reference NS on N = 32 moved 7e-6 on the halved mesh and 4e-5 on the staggered one, 2.5e-5
+        #   from its N = 64 value (the leading pair's |mu| varies by 1e-4 along the discrete phase family).
         mesh = np.asarray(X.mesh, float)
-        fine = np.sort(np.concatenate([mesh, 0.5 * (mesh[:-1] + mesh[1:])]))
-        return [(remesh(X, self.scheme, fine), remesh(tau, self.scheme, fine))]
+        mid = 0.5 * (mesh[:-1] + mesh[1:])
+        fine = np.sort(np.concatenate([mesh, mid]))
+        staggered = np.append(mid - mid[0], 1.0)
+        return [(remesh(X, self.scheme, fine), remesh(tau, self.scheme, fine)),
+                (remesh(X, self.scheme, staggered, mid[0]), remesh(tau, self.scheme, staggered, mid[0]))]
 
     def branch(self, points, special, special_states, outcome, message, settings) -> Branch:
         return Branch.from_points("cycles", self.components, points, special, special_states, outcome, message,
@@ -388,7 +485,8 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
 
     Returns a :class:`Branch` (points so far and the :class:`Outcome`, whatever ended the continuation).
     Raises ``ValueError`` before any work for inputs that do not fit together (:func:`check_cycle_inputs`, a
-    linear solver the problem cannot use, a natural-parameter algorithm from a bifurcation point)."""
+    linear solver the problem cannot use, a natural-parameter algorithm from a bifurcation point), and for a start
+    orbit that is not finite or at any of whose nodes f is NaN or inf (naming the node's scaled time)."""
     if not isinstance(problem, CycleProblem):
         raise ValueError(f"problem must be a CycleProblem, got {type(problem).__name__}")
     if not isinstance(settings, CycleSettings):
@@ -400,12 +498,8 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
                          "natural-parameter steps cannot follow it: use PseudoArclength()")
     check_cycle_inputs(problem, start.orbit, settings)
     check_start(settings, start.orbit.lam, "the start's lam")
-    check_mesh("the start orbit's mesh", start.orbit.mesh)
-    for name in ("xm", "xi", "T"):
-        check_finite(f"the start orbit's {name}", getattr(start.orbit, name))
-    check_field_at(problem.f, start.orbit.xm[0], float(start.orbit.lam), problem.args,
-                   "the start orbit's first node")
     scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1, settings.collocation)
+    _check_orbit(problem, start.orbit, scheme, "the start orbit")
     curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
     ck = as_checkpoint(checkpoint, n=problem.n, start=start.label,
                        problem=fingerprint(problem.f, problem.args, problem.n_trivial),

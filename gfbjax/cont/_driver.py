@@ -130,9 +130,9 @@ class Curve(abc.ABC):
         return None
 
     def other_discretisations(self, X: Any, tau: Any) -> list[tuple[Any, Any]]:
-        """X and its tangent carried to finer discretisations, on which a special point at X is located once more
-        to estimate its discretisation error (``SpecialPoint.lam_error``); empty when the curve has no
-        discretisation (equilibria: the ODE itself is solved)."""
+        """X and its tangent carried to other discretisations (finer, or as fine but placed differently), on which
+        a special point at X is located once more to estimate its discretisation error (``SpecialPoint.lam_error``,
+        the largest move); empty when the curve has no discretisation (equilibria: the ODE itself is solved)."""
         return []
 
     def crossings(self, before: np.ndarray, after: np.ndarray) -> int:

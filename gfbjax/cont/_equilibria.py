@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._branch import Branch, PointRecord
-from ._checks import check_field_at, check_finite, check_start
+from ._checks import check_field_at, check_finite, check_index, check_located_state, check_start
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
@@ -259,17 +259,33 @@ def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettin
 
 def hopf_point(problem: EquilibriumProblem, branch: Branch, which: int = 0) -> HopfPoint:
     """Data of the ``which``-th Hopf point of an equilibrium branch: (lam, x, omega, v) with f_x v = i omega v,
-    omega > 0, |v| = 1 and the phase of v chosen so that its largest component is real."""
+    omega > 0, |v| = 1 and the phase of v chosen so that its largest component is real.  A negative ``which``
+    counts from the end, as in Python.
+
+    ``ValueError`` before any work when ``branch`` is not a branch of equilibria, has no HOPF point, ``which`` is
+    not an int in [-k, k - 1] for its k HOPF points, the point was not located or has no stored state, or
+    ``problem`` is not an :class:`EquilibriumProblem` of the branch's state count."""
+    if not isinstance(problem, EquilibriumProblem):
+        raise ValueError(f"problem must be an EquilibriumProblem, got {type(problem).__name__}")
+    if not isinstance(branch, Branch):
+        raise ValueError(f"branch must be a Branch, got {type(branch).__name__}")
+    if branch.kind != "equilibria":  # Hopf points are events of equilibria; cycles have PD/NS/LPC/BPC instead
+        raise ValueError(f"branch must be a branch of equilibria, got a branch of kind {branch.kind!r}")
     hs = branch.special_of("HOPF")
     if not hs:
         raise ValueError("branch has no HOPF special point")
-    if not hs[which].located:
-        raise ValueError(f"the HOPF point near lam = {hs[which].lam:.6g} was not located (its test function jumps "
-                         "or the localisation failed): its state is not a Hopf point; refine the model or the steps")
-    st = branch.special_states[hs[which].state]
-    y = np.append(st["x"], float(st["lam"]))
+    h = hs[check_index("which", which, len(hs), "HOPF point")]
+    st = check_located_state(branch, h, "refine the model or the steps")
+    x = np.asarray(st["x"], float)
+    if x.shape != (problem.n,):
+        raise ValueError(f"problem.n = {problem.n}, but the branch's equilibria have {x.size} states: pass the "
+                         "problem the branch was computed with")
+    y = np.append(x, float(st["lam"]))
     ev, V = _eig(problem, y)
     cand = np.where(ev.imag > IMAG_TOL)[0]
+    if cand.size == 0:  # the branch's Hopf point is not one of this problem (another args or field)
+        raise ValueError(f"f_x has no complex eigenvalue at the HOPF point near lam = {h.lam:.6g}: pass the problem "
+                         "(f and args) the branch was computed with")
     k = cand[np.argmin(np.abs(ev[cand].real))]
     v = V[:, k]
     v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))

@@ -291,15 +291,18 @@ class BlockKrylov(_Leading):
     The space is :math:`\mathrm{span}\{V_0, MV_0, M^2V_0, \dots\}` with a start block :math:`V_0` of ``block``
     columns or more: the previous point's leading Ritz vectors (the dominant subspace moves little along a
     branch) and at least four fixed pseudo-random columns (so that no direction is missed; see
-    :func:`krylov_leading` for the checks that keep a warm start from missing a newly leading multiplier).  Each product is one block sweep of the
-    linearisation (``monodromy_matmat``), whose factorisations are read once per block instead of once per vector.
+    :func:`krylov_leading` for the checks that keep a warm start from missing a newly leading multiplier).  Each
+    product is one block sweep of the linearisation (``monodromy_matmat``), whose factorisations are read once per
+    block instead of once per vector.
     Because every product :math:`MQ` is kept, each Ritz pair's residual :math:`\|MQy - \theta Qy\|` is computed
     exactly, not estimated; the space grows until it is at most ``tol`` :math:`|\theta|` for every returned
     multiplier of modulus at least ``inside``, and ``tol_inside`` :math:`|\theta|` for those further in.  Those
     only show that nothing else is near the unit circle, and enter the test functions as factors far from zero
     (an error there scales a test function, it does not move its zero); the GFB's film modes crowd there in a
-    continuum, where a tight tolerance would need a space about twice as large.  If ``max_dim`` columns do not
-    suffice, the multipliers come from :class:`Arnoldi` instead.
+    continuum, where a tight tolerance would need a space about twice as large.  Below modulus 1e-3 the residual
+    is measured against 1e-3 instead of :math:`|\theta|`: such a multiplier is zero to every test function, and
+    relative digits of a nearly annihilated mode cannot be had.  If ``max_dim`` columns do not suffice, the
+    multipliers come from :class:`Arnoldi` instead.
     """
 
     block: int = 16
@@ -335,6 +338,13 @@ class BlockKrylov(_Leading):
 #: Relative residual the two Ritz values after the cut must reach: only that they are eigenvalues, so that the cut
 #: falls between true ones, not their digits.
 _GUARD_TOL = 1e-3
+
+#: Modulus below which a Ritz value's residual is measured against this floor instead of its own modulus.  Every
+#: bifurcation happens on the unit circle, so a multiplier of modulus 1e-3 or 1e-12 is "zero" to every test function
+#: (a factor mu + 1, mu - 1 or mu_i mu_j - 1 within 1e-3 of +-1); asking such multipliers for relative digits asks
+#: for the impossible where the spectrum is mostly damped (Radau points damp the stiff film modes to 1e-10 and
+#: below: the space then grew to its limit at every point, 5x the cost of the whole Floquet step).
+_MODULUS_FLOOR = 1e-3
 
 
 def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_inside: float, block: int,
@@ -377,8 +387,9 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
             Yc = Y[:, :checked]
             res = np.linalg.norm(Wa @ Yc - (Qa @ Yc) * theta[:checked], axis=0)
             mod = np.abs(theta[:checked])
-            need = np.where(mod >= inside, tol, tol_inside) * mod
-            need[count:] = _GUARD_TOL * mod[count:]
+            scale = np.maximum(mod, _MODULUS_FLOOR)
+            need = np.where(mod >= inside, tol, tol_inside) * scale
+            need[count:] = _GUARD_TOL * scale[count:]
             if np.all(res <= need):
                 return theta[:count], _ritz_basis(Qa @ Yc[:, :count])
         if dim >= max_dim:

@@ -7,8 +7,8 @@ along X's tangent (:func:`bracket`).  What comes out is a :class:`Found`: locate
 
 * the residual's share, |residual / slope| in s times the tangent's lam component;
 * the bracket's width in s, for a bracketed point;
-* the discretisation's share (:func:`add_discretisation_error`): the move of the zero on the curve's finer
-  discretisation (cycles: every mesh interval halved);
+* the discretisation's share (:func:`add_discretisation_error`): the largest move of the zero on the curve's
+  other discretisations (cycles: every mesh interval halved, and the mesh staggered by half an interval);
 * for a branch point whose corrections fail next to it: where a regular bordered test function, interpolated
   across the gap, vanishes (:func:`_across_the_gap`).
 
@@ -302,14 +302,16 @@ def _across_the_gap(run: Any, solve_at: Callable, center: float, ds: float) -> t
 
 def _relocated_shift(run: Any, f: Found, X2: Any, t2: Any, max_iter: int = 16) -> float:
     """How far in lam the zero of the test function ``f.kind`` at the localised point ``f.point`` moves when the
-    curve is computed on a finer discretisation (``X2``, ``t2``: the point and its tangent carried there,
+    curve is computed on another discretisation (``X2``, ``t2``: the point and its tangent carried there,
     :meth:`Curve.other_discretisations`); NaN where that relocation fails.
 
     Why not the per-orbit mesh estimate: the location of a special point depends on the multipliers (or the
     tangent), whose discretisation error can be far larger than the orbit's.  On the GFB reference branch the
     orbit's estimate is ~5e-7 while the NS moves by ~1e-4 between meshes; at a kink of the vector field a fold
     moves by 1e-4 with a trivial multiplier exact to 1e-14.  The move to a mesh twice as fine is about the error of
-    this one (all of it when the finer one is exact, half of it for a first-order method).
+    this one (all of it when the finer one is exact, half of it for a first-order method) where the error falls
+    steadily with the mesh size; with a kink it does not, and a mesh as fine but placed differently samples it
+    anew (see the cycles' ``other_discretisations``).
 
     The zero on the finer discretisation, in the arclength s along the carried tangent (each point corrected on
     the hyperplane at distance s from the carried point): secant steps from the step's slope until the sign
@@ -360,8 +362,8 @@ def _relocated_shift(run: Any, f: Found, X2: Any, t2: Any, max_iter: int = 16) -
 
 
 def add_discretisation_error(run: Any, f: Found) -> None:
-    """Add to ``f.lam_error`` the move of its zero on a finer discretisation (:func:`_relocated_shift` on each of
-    :meth:`Curve.other_discretisations`); nothing for a curve without one, or next to a branch point (``f.singular``:
+    """Add to ``f.lam_error`` the largest move of its zero on the curve's other discretisations
+    (:func:`_relocated_shift` on each of :meth:`Curve.other_discretisations`); nothing for a curve without one, or next to a branch point (``f.singular``:
     the relocations would fail there as the corrections did).
 
     A jump of the test function (a mesh node crossing a kink of the vector field) closes the bracket to 1e-10

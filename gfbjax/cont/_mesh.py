@@ -96,13 +96,14 @@ def equidistributed_mesh(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
     return mesh
 
 
-def remesh(orbit: col.Orbit, scheme: col.Scheme, mesh: np.ndarray) -> col.Orbit:
-    """The orbit's piecewise polynomial sampled on the nodes of ``mesh`` (T and lam unchanged)."""
+def remesh(orbit: col.Orbit, scheme: col.Scheme, mesh: np.ndarray, shift: float = 0.0) -> col.Orbit:
+    """The orbit's piecewise polynomial sampled on the nodes of ``mesh`` (T and lam unchanged); with ``shift``,
+    the orbit moved in time: the new orbit at scaled time t is the old one at t + shift (mod 1)."""
     old = np.asarray(orbit.mesh, float)
     U = np.asarray(orbit.nodes(), float)
 
     def x_of_t(t):
-        t = np.mod(np.asarray(t, float), 1.0)
+        t = np.mod(np.asarray(t, float) + shift, 1.0)
         j = np.clip(np.searchsorted(old, t, side="right") - 1, 0, len(old) - 2)
         s = (t - old[j]) / (old[j + 1] - old[j])
         B = scheme.basis_at(s)  # (len(t), m+1): each row for its own local point

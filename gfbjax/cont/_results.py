@@ -97,10 +97,10 @@ class SpecialPoint:
     branch; rerun with a smaller ``ds_max``.
     lam_error: an estimate of the error of ``lam``, in its units (NaN: none).  The test function vanishes to
     ``locate_tol`` on *this* discretisation; the zero of the exact problem lies about ``lam_error`` away.  For a
-    located cycle point: how far the zero moves when it is located again on the mesh with every interval halved,
-    plus the residual's share; for a located equilibrium only the residual's share (there is no discretisation).
+    located cycle point: how far the zero moves when it is located again on the mesh with every interval halved
+    or on the mesh staggered by half an interval (the larger move), plus the residual's share; for a located equilibrium only the residual's share (there is no discretisation).
     For a point bracketed but not located: the final bracket's width in the arclength (which bounds it in lam),
-    plus the halved mesh's share for cycles.  A branch point whose corrections failed next to it is placed where a
+    plus the other meshes' share for cycles.  A branch point whose corrections failed next to it is placed where a
     regular bordered test function, interpolated across that gap, vanishes (where the curve's linear solver can
     do that: the dense one), and its error is that interpolation's; otherwise the bracket's width, widened to the
     noise of the multiplier test (|residual / slope|).  For those the discretisation's share is not estimated:

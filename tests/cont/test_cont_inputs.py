@@ -1,5 +1,7 @@
 """Inputs that do not fit together are refused before any work, with the field named; a numerical failure of the
 linear algebra ends a branch with its points kept; a bug in user code propagates."""
+import dataclasses
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -7,7 +9,8 @@ import pytest
 import gfbjax.cont._floquet as floquet_module
 from gfbjax.cont import (Arnoldi, BlockKrylov, CycleProblem, CycleSettings, EquilibriumProblem, EquilibriumSettings,
                          LinearSolveError, Natural, Outcome, SparseSweep, continue_cycles, continue_equilibria,
-                         correct_cycle, hopf_point, start_from_function, start_from_hopf)
+                         correct_cycle, hopf_point, start_from_branch, start_from_function, start_from_hopf,
+                         start_from_pd)
 from cont_systems import stuart_landau
 
 W = 2.0
@@ -192,3 +195,185 @@ def test_flags_and_orientations_accept_zero_dimensional_arrays():
     st = EquilibriumSettings(direction=np.array(-1), locate=np.array(True), detect=[np.str_("HOPF")])
     assert st.direction == -1 and type(st.direction) is int and st.locate is True and st.detect == ("HOPF",)
     assert type(st.detect[0]) is str
+
+
+# ---------------------------------------------------------------- starts and corrections from stored results
+@pytest.fixture(scope="module")
+def sl_equilibria():
+    """Stuart-Landau equilibria through lam = 0: one located HOPF point."""
+    prob = EquilibriumProblem(stuart_landau, 2, jnp.asarray(W))
+    return prob, continue_equilibria(prob, EquilibriumSettings(ds=0.07, max_points=8), np.zeros(2), -0.3)
+
+
+@pytest.fixture(scope="module")
+def sl_cycles(sl_equilibria):
+    """Three stored Stuart-Landau cycles (no PD point on them)."""
+    st = CycleSettings(m=3, N=6, ds=0.05, max_points=3, save_states=True)
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    br = continue_cycles(prob, st, start_from_hopf(hopf_point(*sl_equilibria), st))
+    assert len(br) == 3, br.message
+    return prob, br
+
+
+def _with_pd(br, **kw):
+    """``br`` with one PD point (its state that of point 1); ``kw`` overrides the record's fields."""
+    from gfbjax.cont import SpecialPoint
+    state = {k: (v[1] if v.ndim and v.shape[0] == len(br) else v) for k, v in br.states.items()}
+    fields = {"type": "PD", "lam": float(br.lam[1]), "index": 1, "spectrum": br.multipliers[1], "located": True,
+              "residual": 0.0, "period": float(br.period[1]), "state": 0, **kw}
+    return dataclasses.replace(br, special=[SpecialPoint(**fields)], special_states=[state])
+
+
+@pytest.mark.parametrize("which", [5, 1, -2, -7, 0.0, True, "0", None])
+def test_hopf_point_refuses_an_index_past_its_hopf_points(sl_equilibria, which):
+    """Review cases: 5, 1, -2, -7 and True (read as 1) raised a bare IndexError, 0.0, "0" and None a TypeError."""
+    with pytest.raises(ValueError, match=r"which must be an int in \[-1, 0\] \(the branch has 1 HOPF point\)"):
+        hopf_point(*sl_equilibria, which)
+
+
+def test_hopf_point_accepts_numpy_and_negative_indices(sl_equilibria):
+    first = hopf_point(*sl_equilibria)
+    for which in (np.int64(0), -1, np.array(-1)):
+        assert hopf_point(*sl_equilibria, which).lam == first.lam
+
+
+def test_hopf_point_needs_the_equilibria_of_its_problem(sl_equilibria, sl_cycles):
+    """A cycles branch said "no HOPF special point"; a problem of another size or kind was used as it came, and a
+    HOPF record without its state raised a TypeError."""
+    prob, br = sl_equilibria
+    with pytest.raises(ValueError, match="branch must be a branch of equilibria.*'cycles'"):
+        hopf_point(prob, sl_cycles[1])
+    with pytest.raises(ValueError, match="problem must be an EquilibriumProblem, got CycleProblem"):
+        hopf_point(sl_cycles[0], br)
+    with pytest.raises(ValueError, match=r"problem.n = 3.*2 states"):
+        hopf_point(EquilibriumProblem(stuart_landau, 3, jnp.asarray(W)), br)
+    stateless = dataclasses.replace(br, special=[dataclasses.replace(s, state=None) for s in br.special])
+    with pytest.raises(ValueError, match="HOPF point near lam = .* has no stored state"):
+        hopf_point(prob, stateless)
+
+
+@pytest.mark.parametrize("index", [3, -4, 10, 1.0, True, "0", None])
+def test_start_from_branch_refuses_an_index_past_its_points(sl_cycles, index):
+    """Review cases: 3, -4, 10, 1.0 and "0" raised a bare IndexError; True and None were taken as NumPy indices (a
+    new axis), giving an orbit of the wrong shape."""
+    with pytest.raises(ValueError, match=r"index must be an int in \[-3, 2\] \(the branch has 3 points\)"):
+        start_from_branch(sl_cycles[1], index)
+
+
+def test_start_from_branch_counts_negative_indices_from_the_end(sl_cycles):
+    br = sl_cycles[1]
+    last = start_from_branch(br, -1)
+    assert float(last.orbit.lam) == br.lam[-1] and last.label == "branch[2]"
+    assert float(start_from_branch(br, np.int64(1)).orbit.lam) == br.lam[1]
+
+
+def test_start_from_branch_needs_a_branch_of_cycles(sl_equilibria):
+    """Review case: a branch of equilibria (its states hold x only) raised KeyError: 'mesh'."""
+    with pytest.raises(ValueError, match="branch must be a branch of cycles.*'equilibria'"):
+        start_from_branch(sl_equilibria[1], 0)
+
+
+@pytest.mark.parametrize("special, match", [
+    (0, r"special = 0 cannot index the branch: it has no PD points"),
+    (1.0, r"special must be an int index .* or a SpecialPoint, got 1.0"),
+    (True, r"special must be an int index .* or a SpecialPoint, got True"),
+])
+def test_start_from_pd_refuses_a_pd_the_branch_does_not_have(sl_cycles, special, match):
+    """Review cases: 0 and True (taken as 1) raised a bare IndexError, 1.0 an AttributeError."""
+    with pytest.raises(ValueError, match=match):
+        start_from_pd(sl_cycles[0], sl_cycles[1], special)
+
+
+@pytest.mark.parametrize("special", [1, -2, 7])
+def test_start_from_pd_names_how_many_pd_points_there_are(sl_cycles, special):
+    """Review cases: a bare IndexError that did not say how many PD points there are."""
+    with pytest.raises(ValueError, match=r"special must be an int in \[-1, 0\] \(the branch has 1 PD point\)"):
+        start_from_pd(sl_cycles[0], _with_pd(sl_cycles[1]), special)
+
+
+@pytest.mark.parametrize("fields, match", [
+    ({"type": "NS", "angle": 1.0}, r"special must be a PD point, got a point of type 'NS'"),
+    ({"located": False, "residual": float("nan")}, r"PD point near lam = .* was not located \(not localised\)"),
+    ({"located": False, "residual": 0.3}, r"PD point near lam = .* was not located \(bracketed\)"),
+    ({"state": None}, r"PD point near lam = .* has no stored state"),
+    ({"state": 4}, r"PD point near lam = .* has no stored state"),
+])
+def test_start_from_pd_needs_a_located_pd_point_with_its_state(sl_cycles, fields, match):
+    """Review cases: an NS point and an unlocated PD point were switched from as if they were located PD points;
+    a record without its state raised a TypeError (None) or an IndexError (4)."""
+    br = _with_pd(sl_cycles[1], **fields)
+    with pytest.raises(ValueError, match=match):
+        start_from_pd(sl_cycles[0], br, br.special[0])
+
+
+def test_start_from_pd_needs_the_problem_and_cycles_of_the_branch(sl_cycles, sl_equilibria):
+    """A problem of another size or kind, a branch of equilibria and settings of the wrong kind are named before the
+    transfer matrices are computed."""
+    br = _with_pd(sl_cycles[1])
+    big = CycleProblem(lambda x, lam, a: jnp.concatenate([stuart_landau(x[:2], lam, a), -x[2:]]), 4, jnp.asarray(W))
+    with pytest.raises(ValueError, match=r"problem.n = 4.*2 states"):
+        start_from_pd(big, br, 0)
+    with pytest.raises(ValueError, match="problem must be a CycleProblem, got EquilibriumProblem"):
+        start_from_pd(sl_equilibria[0], br, 0)
+    with pytest.raises(ValueError, match="branch must be a branch of cycles.*'equilibria'"):
+        start_from_pd(sl_cycles[0], sl_equilibria[1], 0)
+    with pytest.raises(ValueError, match="settings must be CycleSettings or None"):
+        start_from_pd(sl_cycles[0], br, 0, EquilibriumSettings())
+
+
+@pytest.mark.parametrize("field, bad, match", [
+    ("omega", 0.0, r"hopf.omega must be a number in \(0, inf\)"),
+    ("omega", -2.0, r"hopf.omega must be a number in \(0, inf\)"),
+    ("omega", float("nan"), r"hopf.omega must be a number"),
+    ("omega", float("inf"), r"hopf.omega must be a number"),
+    ("lam", float("nan"), r"hopf.lam must be a number"),
+    ("x", np.array([0.0, np.nan]), r"hopf.x must be finite.*\[1\] = nan"),
+    ("v", np.array([np.inf, 1j]), r"hopf.v must be finite.*\[0\] = \(?inf"),
+    ("v", np.array([1.0, 1j, 0.0]), r"hopf.v must have the shape of hopf.x, \(2,\), got \(3,\)"),
+    ("v", np.zeros(2, complex), r"hopf.v must not be zero"),
+    ("x", np.zeros((1, 2)), r"hopf.x must be a vector"),
+])
+def test_start_from_hopf_refuses_a_hopf_point_that_is_not_one(sl_equilibria, field, bad, match):
+    """Review cases: omega = 0 and v = 0 raised ZeroDivisionError; a negative, NaN or infinite omega, a NaN lam or
+    state, a v of another length and a matrix x were accepted (a start of NaNs or of mismatched shapes, failing later
+    without a reason)."""
+    hp = dataclasses.replace(hopf_point(*sl_equilibria), **{field: bad})
+    with pytest.raises(ValueError, match=match):
+        start_from_hopf(hp, CycleSettings(m=3, N=6))
+
+
+@pytest.mark.parametrize("entry", ["correct_cycle", "continue_cycles"])
+def test_a_field_that_is_nan_at_a_later_node_is_refused_naming_the_node(entry):
+    """Review case: f NaN on part of the orbit only (here where x1 < -0.5, t in about (0.63, 0.87)).  The start's
+    first node is fine, so continue_cycles and correct_cycle handed it to Newton, which cannot say why it fails."""
+    st = CycleSettings(m=3, N=6, max_points=2)
+    part = CycleProblem(lambda x, lam, a: stuart_landau(x, lam, a) * jnp.where(x[1] < -0.5, jnp.nan, 1.0), 2,
+                        jnp.asarray(W))
+    what = "the start orbit" if entry == "continue_cycles" else "the orbit"
+    with pytest.raises(ValueError, match=rf"NaN or inf at {what}'s node t = 0\.6667 \(mesh\[4\]\), in components 0, 1, "
+                                         r"and at 3 more of its 19 nodes \(lam = 0\.5\)"):
+        if entry == "continue_cycles":
+            continue_cycles(part, st, _sl_start(st))
+        else:
+            correct_cycle(part, _sl_start(st).orbit, settings=st)
+
+
+@pytest.mark.parametrize("arrays, match", [
+    ({"xi": ("at", (3, 1, 0))}, r"the orbit's xi must be finite; it is NaN or inf at its node t = 0\.6111 \(in mesh "
+                                r"interval \[mesh\[3\], mesh\[4\]\] = \[0\.5, 0\.6667\]\), in components 0$"),
+    ({"xm": ("at", (2, 1))}, r"the orbit's xm must be finite; it is NaN or inf at its node t = 0\.3333 \(mesh\[2\]\), "
+                             r"in components 1$"),
+    ({"T": ("set", np.nan)}, r"the orbit's T must be finite"),
+    ({"lam": ("set", np.inf)}, r"the orbit's lam must be finite"),
+    ({"mesh": ("set", np.linspace(0.0, 1.0, 7)[::-1])}, r"the orbit's mesh must increase strictly"),
+])
+def test_correct_cycle_refuses_an_orbit_that_is_not_finite(arrays, match):
+    """Review cases: a NaN in the orbit, its period or parameter, or a reversed mesh went into Newton unchecked
+    (continue_cycles checked them, correct_cycle did not)."""
+    st = CycleSettings(m=3, N=6)
+    orbit = _sl_start(st).orbit
+    for name, (how, what) in arrays.items():
+        value = getattr(orbit, name).at[what].set(np.nan) if how == "at" else jnp.asarray(what)
+        orbit = dataclasses.replace(orbit, **{name: value})
+    with pytest.raises(ValueError, match=match):
+        correct_cycle(CycleProblem(stuart_landau, 2, jnp.asarray(W)), orbit, settings=st)

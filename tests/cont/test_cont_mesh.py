@@ -113,13 +113,30 @@ def test_kink_folds_adaptive_vs_fixed():
 
 
 def _error_estimates_match(branch):
-    """Each fold's estimated error (its zero on the halved mesh, SpecialPoint.lam_error) within a factor of 4
-    of its true error.  Before, nothing signalled the 1e-4 error at the second fold on the fixed mesh: the orbit's
-    mesh estimate is ~1e-5 and the trivial multiplier exact to 1e-14.  (Measured, true vs estimate: 1.4e-5 vs
-    1.2e-5, 1.0e-4 vs 7.7e-5 on the fixed mesh; 2.7e-7 vs 4.4e-7, 1.6e-5 vs 9.6e-6 adapted.)"""
+    """Each fold's estimated error (SpecialPoint.lam_error: the larger move of its zero on the halved and on the
+    staggered mesh) at least a quarter of its true error, and at most ten times it.  Before, nothing signalled the
+    1e-4 error at the second fold on the fixed mesh: the orbit's mesh estimate is ~1e-5 and the trivial
+    multiplier exact to 1e-14.  Measured, true vs estimate: 1.4e-5 vs 1.3e-5, 1.0e-4 vs 7.7e-5 on the fixed mesh;
+    2.7e-7 vs 1.1e-6, 1.6e-5 vs 9.6e-6 adapted.  The upper bound was 4 while the estimate came from the halved
+    mesh alone; the larger of two moves is conservative by design (see the next test), and only the lower bound
+    decides whether a reported point can be trusted."""
     for s in branch.special_of("LPC"):
         true = min(abs(s.lam - f) for f in FOLDS)
-        assert true / 4 <= s.lam_error <= 4 * true, (s.lam, true, s.lam_error)
+        assert true / 4 <= s.lam_error <= 10 * true, (s.lam, true, s.lam_error)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("N", [32, 56])
+def test_kink_fold_error_bar_covers_where_the_halved_mesh_misses(N):
+    """With a kink in f the error of a fold depends on where the kink falls between mesh nodes, and it falls
+    erratically with N: on these fixed meshes the zero moved on the halved mesh by 0.20 (N = 32) and 0.12 (N = 56)
+    of the second fold's true error (1.2e-4, 1.5e-5), and that move was the whole error bar.  The mesh staggered
+    by half an interval samples the kink positions anew (measured 7.0e-4 and 3.5e-5): the bar now covers the
+    error.  (Over N = 16-64 in steps of 4-8, the halved mesh alone reported less than a quarter of the true error
+    for 4 of 22 folds, the larger of the two moves for 1.)"""
+    for s in _resonance(N, 0).special_of("LPC"):
+        true = min(abs(s.lam - f) for f in FOLDS)
+        assert s.lam_error >= true / 2, (N, s.lam, true, s.lam_error)
 
 
 @pytest.mark.parametrize("N, m", [(6, 2), (4, 3)])

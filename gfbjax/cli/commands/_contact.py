@@ -107,8 +107,10 @@ def accuracy_line(acc: dict[str, Any]) -> str:
     # each cause with its own remedy
     why = [(acc["above_trivial_tol"], f"above trivial_tol = {acc['trivial_tol']:g}", "refine --N"),
            (acc["above_mesh_tol"], f"above mesh_tol = {acc['mesh_tol']:g}", "refine --N"),
+           # refining reduces h*lam and so the band, and it also resolves slow modes; radau points remove the band
+           # at any N but damp a mode that oscillates within an interval, so they come second
            (acc.get("above_stiff_tol", 0), f"with spurious multipliers above stiff_tol = {acc.get('stiff_tol')}",
-            "refine --N" if acc.get("collocation") == "radau" else "--collocation radau, or refine --N"),
+            "refine --N" if acc.get("collocation") == "radau" else "refine --N, or --collocation radau"),
            (acc.get("above_multiplier_tol", 0),
             f"with multipliers not resolved to multiplier_tol = {acc.get('multiplier_tol')}", "refine --N"),
            (acc["in_contact"], "in film contact", "the model does not apply there")]

@@ -130,7 +130,7 @@ def special_summary(branch: Any, spec: Any) -> list[dict[str, Any]]:
             "type": s.type, "Omega_bar": lam, "rpm": spec.rpm(lam), "period": s.period,
             "located": bool(s.located), "localisation": s.localisation,
             "residual": None if math.isnan(s.residual) else s.residual, "index": s.index,
-            # the estimated error of Omega_bar: the zero's move on the halved mesh (SpecialPoint.lam_error)
+            # the estimated error of Omega_bar: the zero's move on other meshes (SpecialPoint.lam_error)
             "Omega_bar_error": None if math.isnan(s.lam_error) else s.lam_error,
             "multiplier_moduli": [float(v) for v in np.abs(crit[:4])],
             "critical_multipliers": [[float(z.real), float(z.imag)] for z in crit[:2]],
