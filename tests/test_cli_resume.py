@@ -216,7 +216,7 @@ def test_accuracy_line_gives_each_cause_its_own_remedy():
                  multiplier_error=np.array([0.5, 2e-3, 1e-6]))
     line = accuracy_line(accuracy_summary(gauss))
     assert "2 points flagged" in line and "spurious multipliers up to |mu| 0.950" in line
-    assert "1 with spurious multipliers above stiff_tol = 0.9: refine --N, or --collocation radau" in line
+    assert "1 with spurious multipliers above stiff_tol = 0.9: refine --N or --collocation radau" in line
     assert "2 with multipliers not resolved to multiplier_tol = 0.001: refine --N" in line
     radau = Rows(**common, collocation="radau", stiff_modulus=np.zeros(3), multiplier_error=np.array([2e-3, 0, 0]))
     line = accuracy_line(accuracy_summary(radau))

@@ -359,7 +359,14 @@ def test_equilibria_keep_the_settings_bounds_inside_the_range(small_params):
     br = continue_gfb_equilibria(small_params, 0.2, 0.5, settings)
     assert float(np.max(br.lam)) == pytest.approx(0.3, abs=1e-12)
     assert str(br.outcome) == str(cont.Outcome.REACHED_END)
-    with pytest.raises(ParameterError, match="omega_start = 0.35 lies outside"):
+    with pytest.raises(ParameterError, match="omega_start = 0.35 leaves no room"):
         continue_gfb_equilibria(small_params, 0.35, 0.5, settings)
-    with pytest.raises(ParameterError, match="omega_start = 0.35 lies outside"):
+    with pytest.raises(ParameterError, match="omega_start = 0.35 leaves no room"):
         continue_gfb_cycles(small_params, 0.35, 0.5, default_cycle_settings(lam_max=0.3))
+    # review cases: a start on the bound it heads past, and settings of the wrong kind (AttributeError before)
+    with pytest.raises(ParameterError, match="omega_start = 0.3 leaves no room towards omega_end = 0.5"):
+        continue_gfb_cycles(small_params, 0.3, 0.5, default_cycle_settings(lam_max=0.3))
+    with pytest.raises(ParameterError, match="settings must be CycleSettings or None, got EquilibriumSettings"):
+        continue_gfb_cycles(small_params, 0.3, 0.5, cont.EquilibriumSettings())
+    with pytest.raises(ParameterError, match="settings must be EquilibriumSettings or None, got dict"):
+        continue_gfb_equilibria(small_params, 0.3, 0.5, {"lam_max": 0.4})

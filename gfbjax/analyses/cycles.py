@@ -236,15 +236,26 @@ def _check_speed_range(params: Params, omega_start: float, omega_end: float) -> 
     return omega_start, omega_end
 
 
+def _check_settings(settings: Any, kind: type) -> Any:
+    """``settings`` itself; ParameterError naming it when it is not a ``kind`` (cont.CycleSettings or
+    cont.EquilibriumSettings), before an attribute of another kind fails somewhere inside."""
+    if not isinstance(settings, kind):
+        raise ParameterError(f"settings must be {kind.__name__} or None, got {type(settings).__name__}")
+    return settings
+
+
 def _within_range(settings: Any, omega_start: float, omega_end: float) -> Any:
     """``settings`` (cycles or equilibria) bounded by the speed range and heading from ``omega_start`` to
     ``omega_end``.  Bounds of the settings inside the range stay in force (the branch ends at them); ParameterError
-    when ``omega_start`` lies outside them, before any work."""
-    if not settings.lam_min <= omega_start <= settings.lam_max:
-        raise ParameterError(f"omega_start = {omega_start:g} lies outside the settings' speed bounds [lam_min, "
-                             f"lam_max] = [{settings.lam_min:g}, {settings.lam_max:g}]; start inside them or widen them")
+    when ``omega_start`` lies outside them or on the one it would head past, before any work."""
+    lo_s, hi_s = settings.lam_min, settings.lam_max
+    ahead = hi_s if omega_end > omega_start else lo_s
+    if not lo_s <= omega_start <= hi_s or omega_start == ahead:
+        raise ParameterError(f"omega_start = {omega_start:g} leaves no room towards omega_end = {omega_end:g} inside "
+                             f"the settings' speed bounds [lam_min, lam_max] = [{lo_s:g}, {hi_s:g}]; start inside "
+                             "them or widen them")
     lo, hi = sorted((omega_start, omega_end))
-    return dataclasses.replace(settings, lam_min=max(settings.lam_min, lo), lam_max=min(settings.lam_max, hi),
+    return dataclasses.replace(settings, lam_min=max(lo_s, lo), lam_max=min(hi_s, hi),
                                direction=1 if omega_end > omega_start else -1)
 
 
@@ -286,7 +297,8 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
                              "and start cycles from its Hopf point")
-    settings = _within_range(settings or default_cycle_settings(), omega_start, omega_end)
+    settings = _within_range(_check_settings(settings or default_cycle_settings(), cont.CycleSettings), omega_start,
+                             omega_end)
     meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast
     problem = gfb_cycle_problem(params, monitor)
     _check_size(problem, settings)
@@ -316,7 +328,8 @@ def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int
     ``Branch.tangent_lam`` on the first points tells which).  ``settings.lam_min``/``lam_max`` bound the speed.
     The branch describes itself as in :func:`continue_gfb_cycles` (``spec``: the SystemSpec of ``params``), and
     ``checkpoint``, ``h_rub`` and ``on_contact`` work as there."""
-    settings = settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=80)
+    settings = _check_settings(settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01,
+                                                                  max_points=80), cont.CycleSettings)
     meta = branch_meta(params, "self_excited", spec)
     monitor = film_monitor(h_rub, on_contact)
     hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
@@ -351,11 +364,12 @@ def continue_gfb_equilibria(params: Params, omega_start: float, omega_end: float
     ``checkpoint``, ``h_rub`` and ``on_contact`` (the film thickness of each equilibrium) work as there; ``kw``
     goes to :func:`gfbjax.cont.continue_equilibria` (``callback``, ``progress``).  ``settings`` may omit the speed
     bounds; bounds it sets inside the range narrow it (the branch ends at them).  The start must lie inside them
-    (ValueError otherwise)."""
+    (ParameterError otherwise)."""
     omega_start, omega_end = _check_speed_range(params, omega_start, omega_end)
     monitor = film_monitor(h_rub, on_contact)
     meta = branch_meta(params, "equilibria", spec)  # before the work: a spec of another system fails fast
-    settings = _within_range(settings or cont.EquilibriumSettings(), omega_start, omega_end)
+    settings = _within_range(_check_settings(settings or cont.EquilibriumSettings(), cont.EquilibriumSettings),
+                             omega_start, omega_end)
     eq = solve_equilibrium(params, omega_start)
     if not eq.converged:
         raise NoSolutionError(f"no static equilibrium at Omega_bar = {omega_start}: {eq.message}")

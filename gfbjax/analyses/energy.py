@@ -15,9 +15,11 @@ Over one period of a cycle of the autonomous system (Eq. 21), with the sign conv
 
 The rotor is conservative (spring, gravity, constant loads), so ``W_fu = W_B`` on every periodic solution.  Each
 work is a period integral of a *power* of the state, evaluated with the collocation quadrature itself: the
-m Gauss points of every mesh interval, where the collocation equations make ``x' = T f(x)`` exact.  On a collocation
-solution the identity then holds to rounding: the kinetic-energy and shaft-spring terms are polynomials of degree
-2m - 1 per interval, integrated exactly by m-point Gauss.
+m collocation points of every mesh interval, where the collocation equations make ``x' = T f(x)`` exact.  On a
+collocation solution the identity then holds to rounding: the kinetic-energy and shaft-spring terms are polynomials
+of degree 2m - 1 per interval, integrated exactly by m-point Gauss (and by m-point Radau, exact to degree 2m - 2,
+to the solution's own accuracy).  The quadrature must use the points the orbit was computed on: Gauss quadrature
+of a Radau orbit samples x' = T f(x) where it does not hold (W_fu - W_B ~ 1e-4 relative instead of 1e-14).
 
 Unit conversions (docs/model.md): the gas force is in ``p0 R L`` and displacements in ``c``; the unbalance term of the
 equations is an acceleration, so the force on the disc is ``(m_d / m_j) F_U / zeta = 2 mass_ratio F_U / zeta``
@@ -25,6 +27,7 @@ equations is an acceleration, so the force on the disc is ``(m_d / m_j) F_U / ze
 """
 from __future__ import annotations
 
+from functools import partial
 from typing import Any, NamedTuple
 
 import jax
@@ -72,33 +75,37 @@ def power(s: Array, omega: Array, params: Params) -> Array:
                       2.0 * grid.dtheta * c_f * jnp.sum(qdot * qdot)])
 
 
-def _period_integrals(xm: Array, xi: Array, mesh: Array, T: Array, omega: Array, params: Params) -> Array:
+def _period_integrals(xm: Array, xi: Array, mesh: Array, T: Array, omega: Array, params: Params,
+                      collocation: str = "gauss") -> Array:
     m = xi.shape[1] + 1
-    sch = cont.Scheme(m)
+    sch = cont.Scheme(m, collocation)
     U = jnp.concatenate([xm[:-1, None], xi, xm[1:, None]], axis=1)
-    X = jnp.einsum("ki,jin->jkn", sch.l, U)  # states at the Gauss points
+    X = jnp.einsum("ki,jin->jkn", sch.l, U)  # states at the collocation points
     pw = jax.vmap(jax.vmap(lambda x: power(x, omega, params)))(X)  # (N, m, 3)
     return T * jnp.einsum("j,k,jka->a", jnp.diff(mesh), sch.weights, pw)
 
 
-def orbit_energy(orbit: cont.Orbit, params: Params) -> CycleEnergy:
-    """Works of one collocation orbit (``orbit.lam`` = Omega_bar, ``orbit.T`` the period in t*); pure JAX:
+def orbit_energy(orbit: cont.Orbit, params: Params, collocation: str = "gauss") -> CycleEnergy:
+    """Works of one collocation orbit (``orbit.lam`` = Omega_bar, ``orbit.T`` the period in t*), computed on
+    ``collocation`` points ("gauss" or "radau": those the orbit was computed on, ``cont.Scheme.kind``); pure JAX:
     jit-, grad- and vmap-safe in ``orbit`` and ``params``."""
-    W_fu, W_B, W_cf = _period_integrals(orbit.xm, orbit.xi, orbit.mesh, orbit.T, orbit.lam, params)
+    W_fu, W_B, W_cf = _period_integrals(orbit.xm, orbit.xi, orbit.mesh, orbit.T, orbit.lam, params, collocation)
     return CycleEnergy(W_fu, W_B, W_cf, W_B - W_cf)
 
 
-cycle_energy = jax.jit(orbit_energy)
+cycle_energy = jax.jit(orbit_energy, static_argnames="collocation")
 
 
-@jax.jit
-def _batch(xm, xi, mesh, T, lam, params):
+@partial(jax.jit, static_argnames="collocation")
+def _batch(xm, xi, mesh, T, lam, params, collocation):
     # mesh: (P, N+1), one per point (adapted meshes)
-    return jax.vmap(lambda a, b, g, c, d: _period_integrals(a, b, g, c, d, params))(xm, xi, mesh, T, lam)
+    return jax.vmap(lambda a, b, g, c, d: _period_integrals(a, b, g, c, d, params, collocation))(xm, xi, mesh, T,
+                                                                                               lam)
 
 
 def branch_energy(branch: Any, params: Params) -> CycleEnergy:
-    """Works of every point of a branch computed with ``save_states=True`` (arrays over the points)."""
+    """Works of every point of a branch computed with ``save_states=True`` (arrays over the points), on the
+    branch's own collocation points (``branch.collocation``; Gauss for files that do not record it)."""
     s = branch.states
     if s is None:
         raise ValueError("branch has no stored states: continue it with CycleSettings(save_states=True)")
@@ -106,7 +113,7 @@ def branch_energy(branch: Any, params: Params) -> CycleEnergy:
     if mesh.ndim == 1:  # files of earlier versions: one mesh shared by every point
         mesh = np.broadcast_to(mesh, (len(s["T"]), mesh.size))
     W = np.asarray(_batch(jnp.asarray(s["xm"]), jnp.asarray(s["xi"]), jnp.asarray(mesh), jnp.asarray(s["T"]),
-                          jnp.asarray(s["lam"]), params))
+                          jnp.asarray(s["lam"]), params, getattr(branch, "collocation", None) or "gauss"))
     return CycleEnergy(W[:, 0], W[:, 1], W[:, 2], W[:, 1] - W[:, 2])
 
 

@@ -18,8 +18,8 @@ from typing import Any, Iterable
 import numpy as np
 
 __all__ = ["check_range", "check_flag", "check_sign", "check_choices", "check_index", "check_field_at",
-           "check_field_at_nodes", "check_mesh", "check_finite", "check_located_state", "check_nodes", "check_start", "store",
-           "store_range"]
+           "check_field_at_nodes", "check_mesh", "check_finite", "check_located_state", "check_nodes", "check_start",
+           "store", "store_range"]
 
 
 def _is_bool(value: Any) -> bool:
@@ -133,18 +133,18 @@ def check_field_at(f: Any, x: Any, lam: float, args: Any, where: str) -> None:
                          "the vector field and the start")
 
 
-def _node_report(bad: np.ndarray, times: np.ndarray, mesh: np.ndarray) -> tuple[str, str, str]:
-    """Where the earliest flagged node lies (``bad`` (K, n), at ``times`` (K,) on ``mesh``), how many more are
+def _node_report(bad: np.ndarray, times: np.ndarray, mesh: np.ndarray, noun: str = "node") -> tuple[str, str, str]:
+    """Where the earliest flagged ``noun`` lies (``bad`` (K, n), at ``times`` (K,) on ``mesh``), how many more are
     flagged, and the flagged components of the earliest one: the three parts of a node message."""
     rows = np.flatnonzero(bad.any(axis=1))
     first = rows[np.argmin(times[rows])]
     t = float(times[first])
     j = int(np.searchsorted(mesh, t, side="right")) - 1
     if mesh[j] == t:
-        place = f"{'first node' if t == mesh[0] else 'node'} t = {t:.4g} (mesh[{j}])"
+        place = f"{'first node' if t == mesh[0] else noun} t = {t:.4g} (mesh[{j}])"
     else:
-        place = f"node t = {t:.4g} (in mesh interval [mesh[{j}], mesh[{j + 1}]] = [{mesh[j]:.4g}, {mesh[j + 1]:.4g}])"
-    more = f", and at {rows.size - 1} more of its {len(times)} nodes" if rows.size > 1 else ""
+        place = f"{noun} t = {t:.4g} (in mesh interval [mesh[{j}], mesh[{j + 1}]] = [{mesh[j]:.4g}, {mesh[j + 1]:.4g}])"
+    more = f", and at {rows.size - 1} more of its {len(times)} {noun}s" if rows.size > 1 else ""
     comps = np.flatnonzero(bad[first])
     return place, more, ", ".join(str(int(c)) for c in comps[:5]) + (" ..." if comps.size > 5 else "")
 
@@ -170,17 +170,17 @@ def _field_on_rows() -> Any:
 
 
 def check_field_at_nodes(f: Any, nodes: Any, times: Any, mesh: Any, lam: float, args: Any, where: str) -> None:
-    """:func:`check_field_at` at every node of an orbit (``nodes`` (K, n) at the scaled ``times`` (K,) on
-    ``mesh``; ``where`` names the orbit), in one compiled, vmapped evaluation: ``ValueError`` naming the earliest
-    node where f is NaN or inf, by its time and mesh point or interval, its components and how many nodes are
-    affected.  A field that fails on part of an orbit only passes a check at its first node, and Newton then
+    """:func:`check_field_at` at points of an orbit (``nodes`` (K, n): its nodes and collocation points, at the
+    scaled ``times`` (K,) on ``mesh``; ``where`` names the orbit), in one compiled, vmapped evaluation:
+    ``ValueError`` naming the earliest point where f is NaN or inf, by its time and mesh point or interval, its
+    components and how many points are affected.  A field that fails on part of an orbit only passes a check at its first node, and Newton then
     fails there with nothing to say why."""
     import jax.numpy as jnp
 
     out = np.asarray(_field_on_rows()(f, jnp.asarray(nodes, float), lam, args), float)
     bad = ~np.isfinite(out)
     if bad.any():
-        place, more, comps = _node_report(bad, np.asarray(times, float), np.asarray(mesh, float))
+        place, more, comps = _node_report(bad, np.asarray(times, float), np.asarray(mesh, float), "point")
         raise ValueError(f"f(x, lam, args) is NaN or inf at {where}'s {place}, in components {comps}{more} (lam = "
                          f"{lam:g}): check the vector field and the start")
 

@@ -137,7 +137,11 @@ def _pd_point(branch: Branch, special: Any) -> SpecialPoint:
         sp = special
         if sp.type != "PD":
             raise ValueError(f"special must be a PD point, got a point of type {sp.type!r} (near lam = {sp.lam:.6g})")
-    elif isinstance(special, (int, np.integer)) and not isinstance(special, (bool, np.bool_)):
+        # its state is an index into the branch it came from: a point of another branch would pick a wrong orbit
+        if not any(s is sp or (s.type, s.lam, s.state) == (sp.type, sp.lam, sp.state) for s in branch.special):
+            raise ValueError(f"special (the PD point near lam = {sp.lam:.6g}) is not a special point of this branch "
+                             f"(its PD points: {[round(s.lam, 6) for s in branch.special_of('PD')]})")
+    elif np.ndim(special) == 0 and np.issubdtype(np.asarray(special).dtype, np.integer):  # bools are not integers
         pds = branch.special_of("PD")
         sp = pds[check_index("special", special, len(pds), "PD point")]
     else:
@@ -231,19 +235,23 @@ def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleS
 
 def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, what: str) -> None:
     """ValueError naming ``what`` when the orbit is no place to start Newton from: a mesh that is not one, a
-    period or parameter that is not finite, a state that is NaN or inf at any node, or a vector field that is NaN
-    or inf at any node (all nodes in one compiled call; at the first one only, a field that fails on part of the
-    orbit would end the correction with no reason given).  After :func:`check_cycle_inputs` (the shapes)."""
+    period that is not positive, a parameter that is not finite, a state that is NaN or inf at any node, or a
+    vector field that is NaN or inf at any node or collocation point (all in one compiled call; at the first node
+    only, a field that fails on part of the orbit would end the correction with no reason given).  After
+    :func:`check_cycle_inputs` (the shapes)."""
     mesh = check_mesh(f"{what}'s mesh", orbit.mesh)
-    for name in ("T", "lam"):
-        check_finite(f"{what}'s {name}", getattr(orbit, name))
+    check_range(f"{what}'s T (period)", orbit.T, 0.0, np.inf, lo_open=True, hi_open=True)
+    check_finite(f"{what}'s lam", orbit.lam)
     n = orbit.n
     inner = col.node_times(mesh, scheme)[:, 1:-1].ravel()
     xi = orbit.xi.reshape(-1, n)
     check_nodes(f"{what}'s xm", orbit.xm, mesh, mesh)
     check_nodes(f"{what}'s xi", xi, inner, mesh)
-    check_field_at_nodes(problem.f, jnp.concatenate([orbit.xm, xi]), np.concatenate([mesh, inner]), mesh,
-                         float(orbit.lam), problem.args, what)
+    # f is evaluated at the collocation points, between the nodes: check it there too
+    at_points = jnp.einsum("ki,jin->jkn", scheme.l, orbit.nodes()).reshape(-1, n)
+    t_points = (mesh[:-1, None] + np.diff(mesh)[:, None] * scheme.points[None, :]).ravel()
+    check_field_at_nodes(problem.f, jnp.concatenate([orbit.xm, xi, at_points]),
+                         np.concatenate([mesh, inner, t_points]), mesh, float(orbit.lam), problem.args, what)
 
 
 def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,
@@ -263,6 +271,10 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
         raise ValueError(f"settings must be CycleSettings or None, got {type(settings).__name__}")
     if con is not None and not isinstance(con, col.Constraint):
         raise ValueError(f"con must be a Constraint or None, got {type(con).__name__}")
+    if con is not None and any(o.xm.shape != orbit.xm.shape or o.xi.shape != orbit.xi.shape
+                               for o in (con.ref, con.base, con.v)):
+        raise ValueError(f"con was built on another mesh or state count (its reference has xm {con.ref.xm.shape}, "
+                         f"the orbit {orbit.xm.shape}): build it from this orbit (natural_constraint(orbit, lam))")
     s = settings or CycleSettings()
     check_cycle_inputs(problem, orbit, s)
     scheme = col.Scheme(int(orbit.xi.shape[1]) + 1, s.collocation)

@@ -17,6 +17,7 @@ optimisers are compared.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -28,6 +29,7 @@ import numpy as np
 
 from .. import cont
 from ..cont import Orbit
+from ..cont._collocation import COLLOCATION_POINTS
 from ..analyses.cycles import gfb_cycle_problem, unbalance_response_start
 from ..limits import NoSolutionError
 from ..analyses.energy import CycleEnergy, orbit_energy
@@ -46,9 +48,15 @@ class CycleNotConverged(NoSolutionError):
     """Newton found no cycle at these foil properties (counted as a solve)."""
 
 
-def W_cb_of(orbit: Orbit, params: Params) -> jax.Array:
-    """W_cb of a collocation orbit [p0 R L c] (the OBJ1 functional, pure JAX)."""
-    return orbit_energy(orbit, params).W_cb
+def W_cb_of(orbit: Orbit, params: Params, collocation: str = "gauss") -> jax.Array:
+    """W_cb of a collocation orbit [p0 R L c] (the OBJ1 functional, pure JAX), on the ``collocation`` points the
+    orbit was computed on."""
+    return orbit_energy(orbit, params, collocation).W_cb
+
+
+# W_cb on each kind of points, one object each: the gradient kernels take the functional as a static argument and
+# compile once per object, so every design shares them
+_W_CB_ON = {kind: functools.partial(W_cb_of, collocation=kind) for kind in COLLOCATION_POINTS}
 
 
 #: the multiplier error above which an evaluation's max_mu is not resolved (``cont.CycleSettings.multiplier_tol``)
@@ -151,6 +159,7 @@ class FoilDesign:
             raise ParameterError(str(exc)) from None
         self.params, self.omega = params, float(omega)
         self.scheme = cont.Scheme(m, collocation)
+        self._W_cb = _W_CB_ON[self.scheme.kind]
         problem = gfb_cycle_problem(params)
         cont.bind_solver(problem, self.scheme, self.settings)  # a bad solver fails here
         try:
@@ -212,12 +221,12 @@ class FoilDesign:
         stiff, mu_error = cont.resolution(problem.f, orbit, problem.args, self.scheme,
                                           float(np.max(np.abs(nt), initial=0.0)))
         ev = CycleEvaluation(float(alpha_f), float(eta), self.omega, orbit,
-                             CycleEnergy(*(float(w) for w in orbit_energy(orbit, p))), mu,
+                             CycleEnergy(*(float(w) for w in orbit_energy(orbit, p, self.scheme.kind))), mu,
                              float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(sol.iterations),
                              stiff_modulus=stiff, multiplier_error=mu_error)
         if gradient and self.gradient_mode == "adjoint":
             self.n_gradients += 1
-            g = cont.adjoint_gradient(problem, lin, self.scheme, W_cb_of)
+            g = cont.adjoint_gradient(problem, lin, self.scheme, self._W_cb)
             _, gm = cont.multiplier_gradient(problem, lin, self.scheme)
             ev.grad_W_cb = np.array([float(getattr(g, k)) for k in DESIGN_VARIABLES])
             ev.grad_max_mu = np.array([float(getattr(gm, k)) for k in DESIGN_VARIABLES])
@@ -225,7 +234,7 @@ class FoilDesign:
             self.n_gradients += 1
             dargs = self._directions(p)
             tangents = cont.orbit_sensitivities(problem, lin, dargs, self.scheme)
-            ev.grad_W_cb = cont.functional_derivatives(W_cb_of, orbit, p, tangents, dargs)
+            ev.grad_W_cb = cont.functional_derivatives(self._W_cb, orbit, p, tangents, dargs)
             mu0, dmu = cont.multiplier_derivatives(problem, lin, self.scheme, tangents, dargs)
             ev.grad_max_mu = np.array([np.real(np.conj(mu0) * d) / abs(mu0) for d in dmu])
         return ev

@@ -306,6 +306,27 @@ def test_start_from_pd_needs_a_located_pd_point_with_its_state(sl_cycles, fields
         start_from_pd(sl_cycles[0], br, br.special[0])
 
 
+def test_start_from_pd_refuses_a_point_of_another_branch(sl_cycles):
+    """Review case: a PD point of branch B given with branch A was switched from at A's PD point (its state index
+    read in A).  Index forms of the point are accepted: NumPy and 0-d array integers."""
+    a = _with_pd(sl_cycles[1])
+    b = _with_pd(sl_cycles[1], lam=float(sl_cycles[1].lam[2]))
+    with pytest.raises(ValueError, match=r"special \(the PD point near lam = .*\) is not a special point of this "):
+        start_from_pd(sl_cycles[0], a, b.special[0])
+    assert start_from_pd(sl_cycles[0], a, a.special[0]).label == "PD switch"
+    for index in (np.int64(0), np.array(0), jnp.asarray(0), -1):
+        assert start_from_pd(sl_cycles[0], a, index).label == "PD switch"
+
+
+def test_correct_cycle_refuses_a_constraint_of_another_mesh(sl_cycles):
+    """Review case: a constraint built on an orbit of another N raised a JAX shape error from inside Newton."""
+    from gfbjax.cont import natural_constraint
+    st = CycleSettings(m=3, N=6)
+    other = _sl_start(CycleSettings(m=3, N=8)).orbit
+    with pytest.raises(ValueError, match=r"con was built on another mesh"):
+        correct_cycle(sl_cycles[0], _sl_start(st).orbit, natural_constraint(other, 0.5), settings=st)
+
+
 def test_start_from_pd_needs_the_problem_and_cycles_of_the_branch(sl_cycles, sl_equilibria):
     """A problem of another size or kind, a branch of equilibria and settings of the wrong kind are named before the
     transfer matrices are computed."""
@@ -350,8 +371,9 @@ def test_a_field_that_is_nan_at_a_later_node_is_refused_naming_the_node(entry):
     part = CycleProblem(lambda x, lam, a: stuart_landau(x, lam, a) * jnp.where(x[1] < -0.5, jnp.nan, 1.0), 2,
                         jnp.asarray(W))
     what = "the start orbit" if entry == "continue_cycles" else "the orbit"
-    with pytest.raises(ValueError, match=rf"NaN or inf at {what}'s node t = 0\.6667 \(mesh\[4\]\), in components 0, 1, "
-                                         r"and at 3 more of its 19 nodes \(lam = 0\.5\)"):
+    with pytest.raises(ValueError, match=rf"NaN or inf at {what}'s point t = 0\.6479 \(in mesh interval \[mesh\[3\], "
+                                         r"mesh\[4\]\] = \[0\.5, 0\.6667\]\), in components 0, 1, and at 8 more of its "
+                                         r"37 points \(lam = 0\.5\)"):
         if entry == "continue_cycles":
             continue_cycles(part, st, _sl_start(st))
         else:
@@ -363,7 +385,9 @@ def test_a_field_that_is_nan_at_a_later_node_is_refused_naming_the_node(entry):
                                 r"interval \[mesh\[3\], mesh\[4\]\] = \[0\.5, 0\.6667\]\), in components 0$"),
     ({"xm": ("at", (2, 1))}, r"the orbit's xm must be finite; it is NaN or inf at its node t = 0\.3333 \(mesh\[2\]\), "
                              r"in components 1$"),
-    ({"T": ("set", np.nan)}, r"the orbit's T must be finite"),
+    ({"T": ("set", np.nan)}, r"the orbit's T \(period\) must be a number in \(0\.0, inf\)"),
+    ({"T": ("set", 0.0)}, r"the orbit's T \(period\) must be a number in \(0\.0, inf\)"),
+    ({"T": ("set", -2 * np.pi)}, r"the orbit's T \(period\) must be a number in \(0\.0, inf\)"),
     ({"lam": ("set", np.inf)}, r"the orbit's lam must be finite"),
     ({"mesh": ("set", np.linspace(0.0, 1.0, 7)[::-1])}, r"the orbit's mesh must increase strictly"),
 ])

@@ -110,7 +110,7 @@ def accuracy_line(acc: dict[str, Any]) -> str:
            # refining reduces h*lam and so the band, and it also resolves slow modes; radau points remove the band
            # at any N but damp a mode that oscillates within an interval, so they come second
            (acc.get("above_stiff_tol", 0), f"with spurious multipliers above stiff_tol = {acc.get('stiff_tol')}",
-            "refine --N" if acc.get("collocation") == "radau" else "refine --N, or --collocation radau"),
+            "refine --N" if acc.get("collocation") == "radau" else "refine --N or --collocation radau"),
            (acc.get("above_multiplier_tol", 0),
             f"with multipliers not resolved to multiplier_tol = {acc.get('multiplier_tol')}", "refine --N"),
            (acc["in_contact"], "in film contact", "the model does not apply there")]
