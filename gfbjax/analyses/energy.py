@@ -19,7 +19,7 @@ m collocation points of every mesh interval, where the collocation equations mak
 collocation solution the identity then holds to rounding: the kinetic-energy and shaft-spring terms are polynomials
 of degree 2m - 1 per interval, integrated exactly by m-point Gauss (and by m-point Radau, exact to degree 2m - 2,
 to the solution's own accuracy).  The quadrature must use the points the orbit was computed on: Gauss quadrature
-of a Radau orbit samples x' = T f(x) where it does not hold (W_fu - W_B ~ 1e-4 relative instead of 1e-14).
+of a Radau orbit samples x' = T f(x) where it does not hold (W_fu - W_B up to 7e-5 relative on an adapted mesh).
 
 Unit conversions (docs/model.md): the gas force is in ``p0 R L`` and displacements in ``c``; the unbalance term of the
 equations is an acceleration, so the force on the disc is ``(m_d / m_j) F_U / zeta = 2 mass_ratio F_U / zeta``
