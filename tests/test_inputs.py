@@ -370,3 +370,19 @@ def test_equilibria_keep_the_settings_bounds_inside_the_range(small_params):
         continue_gfb_cycles(small_params, 0.3, 0.5, cont.EquilibriumSettings())
     with pytest.raises(ParameterError, match="settings must be EquilibriumSettings or None, got dict"):
         continue_gfb_equilibria(small_params, 0.3, 0.5, {"lam_max": 0.4})
+
+
+def test_hopf_cycles_refuse_params_of_another_system(small_params):
+    """Review case: equilibria of one system and params of another (here the smoothed Gumbel condition) ended the
+    Hopf cycles at once with 0 points and no reason; the branch records its params, so they are compared first
+    (the unbalance eps aside: both problems are of the balanced system)."""
+    from gfbjax import cont
+    from gfbjax.analyses.cycles import continue_gfb_equilibria, continue_gfb_hopf_cycles
+
+    eq = continue_gfb_equilibria(small_params, 0.3, 0.4, cont.EquilibriumSettings(max_points=2))
+    other = gfbjax.SystemSpec(Nx=16, Nz=2, gumbel_width=1e-3).nondim()
+    with pytest.raises(ParameterError, match=r"params are not the system the equilibria were computed for: "
+                                             r"gumbel_width = 0\.001 \(the equilibria: 0\.0\)"):
+        continue_gfb_hopf_cycles(other, eq, 0)
+    with pytest.raises(ValueError, match="no HOPF"):  # the same system passes on to the Hopf point's own checks
+        continue_gfb_hopf_cycles(dataclasses.replace(small_params, eps=0.0), eq, 0)

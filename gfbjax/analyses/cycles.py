@@ -331,6 +331,7 @@ def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int
     settings = _check_settings(settings or default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01,
                                                                   max_points=80), cont.CycleSettings)
     meta = branch_meta(params, "self_excited", spec)
+    _check_equilibria_of(params, equilibria)
     monitor = film_monitor(h_rub, on_contact)
     hp = cont.hopf_point(gfb_equilibrium_problem(params), equilibria, which)
     problem = gfb_self_excited_problem(params, monitor)
@@ -340,6 +341,28 @@ def continue_gfb_hopf_cycles(params: Params, equilibria: cont.Branch, which: int
                                   checkpoint=_checkpoint(checkpoint, meta, float(hp.lam), which,
                                                          monitor.describe()))
     return describe_branch(branch, meta)
+
+
+def _check_equilibria_of(params: Params, equilibria: Any) -> None:
+    """ParameterError when the equilibrium branch records (``meta["params"]``) a balanced system other than that
+    of ``params``: its Hopf point is then no Hopf point of these cycles, which would end at once with no point and no
+    reason.  The unbalance ``eps`` is left out (both problems are of the balanced system); a branch without that
+    record (not from :func:`continue_gfb_equilibria`) is not checked."""
+    recorded = (getattr(equilibria, "meta", None) or {}).get("params")
+    if not isinstance(recorded, dict):
+        return
+    differ = []
+    for f in dataclasses.fields(params):
+        if f.name == "eps" or f.name not in recorded:
+            continue
+        v, w = _plain(getattr(params, f.name)), recorded[f.name]
+        same = (math.isclose(v, w, rel_tol=1e-12, abs_tol=1e-300)
+                if isinstance(v, float) and isinstance(w, float) else v == w)
+        if not same:
+            differ.append(f"{f.name} = {v!r} (the equilibria: {w!r})")
+    if differ:
+        raise ParameterError("params are not the system the equilibria were computed for: " + ", ".join(differ[:5])
+                             + (" ..." if len(differ) > 5 else "") + "; pass the params of continue_gfb_equilibria")
 
 
 def hopf_criticality(cycles: cont.Branch, lam_hopf: float) -> str:
