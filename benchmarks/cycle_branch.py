@@ -77,6 +77,7 @@ def main() -> None:
         "collocation": settings.collocation, "flagged_points": int(np.sum(branch.flagged)),
         "max_stiff_modulus": float(np.max(branch.stiff_modulus)),
         "max_multiplier_error": float(np.max(branch.multiplier_error)),
+        "max_mesh_error": float(np.max(branch.mesh_error)),
         "multiplier_error_by_speed": [[round(float(l), 4), float(f"{v:.2e}")]
                                       for l, v in zip(branch.lam, branch.multiplier_error)],
         "stiff_modulus_by_speed": [[round(float(l), 4), round(float(v), 4)]
@@ -117,6 +118,7 @@ def main() -> None:
             ("collocation points", rec["collocation"]),
             ("spurious multipliers up to |mu| (stiff_modulus)", f"{rec['max_stiff_modulus']:.3f}"),
             ("max multiplier error (frozen-coefficient estimate)", f"{rec['max_multiplier_error']:.1e}"),
+            ("max mesh error of the orbits (relative)", f"{rec['max_mesh_error']:.1e}"),
             ("flagged points", rec["flagged_points"])]
     rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f}"
               + ("" if s["Omega_bar_error"] is None else f" +- {s['Omega_bar_error']:.0e}") + f" ({s['rpm']:.0f} rpm)")

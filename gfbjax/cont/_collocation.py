@@ -70,6 +70,7 @@ matrix (see ``_floquet.py``).
 """
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable, NamedTuple
 
 import equinox as eqx
@@ -138,6 +139,7 @@ class Scheme:
             self.points = 0.5 * (np.sort((leg.basis(m) - leg.basis(m - 1)).roots().real) + 1.0)
             self.weights = self._integrals(1.0)
         self.l, self.dl = _lagrange_matrices(self.nodes, self.points)
+        self._rk_matrix = self._integrals(self.points)  # A[i, j] = int_0^{c_i} L_j (the Runge-Kutta matrix)
 
     def _integrals(self, upper: Any) -> np.ndarray:
         """``out[..., j]``: the integral from 0 to ``upper`` of the Lagrange basis on the collocation points."""
@@ -153,7 +155,7 @@ class Scheme:
         (complex array in, same shape out).  exp(z) to the scheme's order for small |z|; for z -> -inf, (-1)^m
         (Gauss) or 0 (Radau)."""
         z = np.asarray(z, complex)
-        A = self._integrals(self.points)  # A[i, j] = int_0^{c_i} L_j (the scheme's Runge-Kutta matrix)
+        A = self._rk_matrix
         flat = z.reshape(-1, 1, 1)
         stage = np.linalg.solve(np.eye(self.m) - flat * A, np.ones((flat.shape[0], self.m, 1)))[..., 0]
         return (1.0 + z.ravel() * (stage @ self.weights)).reshape(z.shape)
@@ -196,10 +198,10 @@ class Orbit(eqx.Module):
 
     def nodes(self) -> jax.Array:
         """Per-interval node values, shape (N, m+1, n)."""
-        return jnp.concatenate([self.xm[:-1, None], self.xi, self.xm[1:, None]], axis=1)
+        return _nodes(self.xm, self.xi)
 
     def to_flat(self) -> jax.Array:
-        return jnp.concatenate([self.xm.ravel(), self.xi.ravel(), jnp.stack([self.T, self.lam])])
+        return _flat(self.xm, self.xi, self.T, self.lam)
 
     def from_flat(self, v: jax.Array) -> "Orbit":
         a = self.xm.size
@@ -211,6 +213,29 @@ class Orbit(eqx.Module):
 
     def scale(self, c: Any) -> "Orbit":
         return Orbit(self.mesh, c * self.xm, c * self.xi, c * self.T, c * self.lam)
+
+
+# jitted, like the functionals below: called from the host at every step, where op-by-op dispatch is the cost
+@jax.jit
+def _nodes(xm: jax.Array, xi: jax.Array) -> jax.Array:
+    return jnp.concatenate([xm[:-1, None], xi, xm[1:, None]], axis=1)
+
+
+@jax.jit
+def _flat(xm: jax.Array, xi: jax.Array, T: jax.Array, lam: jax.Array) -> jax.Array:
+    return jnp.concatenate([xm.ravel(), xi.ravel(), jnp.stack([T, lam])])
+
+
+@jax.jit
+def add(a: Orbit, b: Orbit) -> Orbit:
+    """a + b (same mesh), compiled."""
+    return a + b
+
+
+@jax.jit
+def scaled(a: Orbit, c: Any) -> Orbit:
+    """c a, compiled."""
+    return a.scale(c)
 
 
 def uniform_mesh(N: int) -> np.ndarray:
@@ -288,6 +313,9 @@ def integral_coeffs(g: jax.Array, h: jax.Array, scheme: Scheme) -> jax.Array:
     return jnp.einsum("j,k,ki,jkn->jin", h, scheme.weights, scheme.l, g)
 
 
+# jitted: the continuation loop calls these from the host at every step, where op-by-op dispatch of the einsums
+# cost ~2.5 ms a call (the larger part of a point's cost at small n)
+@functools.partial(jax.jit, static_argnums=(2,))
 def inner(a: Orbit, b: Orbit, scheme: Scheme) -> jax.Array:
     """<a, b> = int_0^1 <a(t), b(t)> dt + a.T b.T + a.lam b.lam  (norm of Eq. (30))."""
     h = jnp.diff(a.mesh)
@@ -296,6 +324,7 @@ def inner(a: Orbit, b: Orbit, scheme: Scheme) -> jax.Array:
     return jnp.einsum("j,k,jkn,jkn->", h, scheme.weights, ga, gb) + a.T * b.T + a.lam * b.lam
 
 
+@functools.partial(jax.jit, static_argnums=(1,))
 def l2_norm(orbit: Orbit, scheme: Scheme) -> jax.Array:
     """sqrt( int_0^1 |x(t)|^2 dt )."""
     h = jnp.diff(orbit.mesh)

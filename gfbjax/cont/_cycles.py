@@ -331,10 +331,10 @@ class CycleCurve(Curve):
         self._comps = jnp.asarray(self.components)
 
     def add(self, a, b):
-        return a + b
+        return col.add(a, b)
 
     def scale(self, a, c):
-        return a.scale(c)
+        return col.scaled(a, c)
 
     def inner(self, a, b):
         return float(col.inner(a, b, self.scheme))
@@ -406,9 +406,10 @@ class CycleCurve(Curve):
         stiff, mu_error = resolution(self.problem.f, X, self.problem.args, self.scheme,
                                      float(np.max(nt, initial=0.0)))
         state = _orbit_state(X) if self.settings.save_states else None
+        mesh_error = error_estimate(X, self.scheme, self.problem.f, self.problem.args)
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
                            an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state,
-                           an.get("monitor", float("nan")), error_estimate(X, self.scheme), stiff, mu_error)
+                           an.get("monitor", float("nan")), mesh_error, stiff, mu_error)
 
     def state(self, X):
         return _orbit_state(X)

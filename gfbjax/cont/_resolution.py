@@ -40,6 +40,7 @@ from functools import partial
 from typing import Any, Callable
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from . import _collocation as col
@@ -71,7 +72,7 @@ def resolution(f: Callable, orbit: col.Orbit, args: Any, scheme: col.Scheme,
         return math.nan, math.nan
     N = orbit.N
     at = np.unique((np.arange(NODES) * N) // NODES)
-    J = np.asarray(_jacobians(f, orbit.xm[at], orbit.lam, args))
+    J = np.asarray(_jacobians(f, jnp.asarray(np.asarray(orbit.xm)[at]), orbit.lam, args))
     h = float(orbit.T) * np.diff(np.asarray(orbit.mesh, float))
     T = float(np.sum(h))
     stiff, error = 0.0, 0.0

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, start_from_function
+from gfbjax.cont import CycleProblem, CycleSettings, continue_cycles, correct_cycle, start_from_function
 from gfbjax.cont import _collocation as col
-from gfbjax.cont._mesh import error_estimate, interval_errors
+from gfbjax.cont._mesh import defect_errors, error_estimate, interval_errors
 
 
 def snic(x, lam, args):
@@ -60,20 +60,27 @@ def test_fixed_mesh_loses_the_period_and_says_so():
     assert np.all(br.flagged[err > 1e-5])
 
 
+def _true_error(f, o, sch):
+    """The orbit against a tight time integration from its own first node, max over 16 points per interval."""
+    t, X = col.evaluate(o, sch, 16)
+    lam, T = float(o.lam), float(o.T)
+    ref = solve_ivp(lambda tt, x: np.asarray(f(jnp.asarray(x), lam, None)), (0, T), X[0], t_eval=t * T,
+                    rtol=1e-12, atol=1e-13, method="DOP853").y.T
+    return np.max(np.abs(X - ref))
+
+
 def test_error_estimate_matches_the_true_error(adapted):
     """The estimate against the orbit's true error between its nodes (a tight time integration from the orbit's
-    own first node): within a factor of 4 either way."""
+    own first node): within a factor of 4 either way.  The field is smooth, so the summed defects are far below
+    the interpolation estimate and leave it unchanged."""
     br, sch = adapted, col.Scheme(4)
     for i in (0, 40, 100):
         o = col.Orbit(*(jnp.asarray(br.states[k][i]) for k in ("mesh", "xm", "xi", "T", "lam")))
-        t, X = col.evaluate(o, sch, 16)
-        lam, T = float(o.lam), float(o.T)
-        ref = solve_ivp(lambda tt, x: np.asarray(snic(jnp.asarray(x), lam, None)), (0, T), X[0], t_eval=t * T,
-                        rtol=1e-12, atol=1e-13, method="DOP853").y.T
-        true = np.max(np.abs(X - ref))
+        true = _true_error(snic, o, sch)
         est = np.max(interval_errors(o, sch))
         assert true / 4 <= est <= 4 * true, (i, true, est)
-        assert error_estimate(o, sch) == pytest.approx(est / (1 + np.max(np.abs(np.asarray(o.xm)))))
+        assert np.sum(defect_errors(snic, None, o, sch)) < est / 10
+        assert error_estimate(o, sch, snic) == pytest.approx(est / (1 + np.max(np.abs(np.asarray(o.xm)))))
 
 
 def kinked_oscillator(z, w, args):
@@ -96,6 +103,30 @@ def _resonance(N, adapt):
     st = CycleSettings(m=4, N=N, ds=0.05, ds_max=0.3, lam_min=0.85, lam_max=1.3, max_points=150, adapt=adapt,
                        detect=("LPC",))
     return continue_cycles(CycleProblem(kinked_oscillator, 4), st, start_from_function(x_of_t, 2 * np.pi / w0, w0, st))
+
+
+@pytest.mark.parametrize("N", [16, 32, 64])
+def test_mesh_error_sees_the_kink(N):
+    """The kinked oscillator at omega = 1 (x reaches 0.62, past the kink at 0.5) on uniform meshes: the orbit's
+    true error (8.6e-4, 2.0e-4, 3.1e-5) against the interpolation estimate alone (3.4e-5, 1.2e-5, 2.6e-6: 25-17x
+    short) and the reported estimate, which adds up the collocation defects by a finer quadrature (measured
+    8.5e-4, 1.7e-4, 2.3e-5)."""
+    w0 = 1.0
+    H = 0.1 / (1 - w0 ** 2 + 0.1j * w0)
+
+    def x_of_t(t):  # the linear response as the guess
+        e = np.exp(2j * np.pi * t)
+        return np.stack([np.real(H * e), np.real(1j * w0 * H * e), e.real, -e.imag], -1)
+    st = CycleSettings(m=4, N=N)
+    sol, _ = correct_cycle(CycleProblem(kinked_oscillator, 4), start_from_function(x_of_t, 2 * np.pi / w0, w0, st).orbit,
+                           settings=st)
+    assert sol.converged
+    o, sch = sol.x, col.Scheme(4)
+    true = _true_error(kinked_oscillator, o, sch)
+    scale = 1 + np.max(np.abs(np.asarray(o.xm)))
+    assert np.max(interval_errors(o, sch)) < true / 8  # the blind spot the defects cover
+    est = error_estimate(o, sch, kinked_oscillator) * scale
+    assert true / 2 <= est <= 2 * true, (N, true, est)
 
 
 @pytest.mark.slow
@@ -139,6 +170,23 @@ def test_kink_fold_error_bar_covers_where_the_halved_mesh_misses(N):
         assert s.lam_error >= true / 2, (N, s.lam, true, s.lam_error)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("N", [16, 48])
+def test_folds_off_by_more_than_the_mesh_tolerance_are_flagged(N):
+    """On coarse uniform meshes the kink puts the second fold 4e-4 to 1e-3 off, and at N = 16 the branch wiggles
+    through three folds where there is one.  Before the orbit's mesh error summed the collocation defects, it was
+    below mesh_tol on all of them and nothing was flagged; now every fold that is off by more than mesh_tol (1e-4)
+    lies on a flagged point (measured mesh errors 1.0e-3 to 1.5e-3 at N = 16, 1.7e-4 at N = 48), while the
+    first fold, off by at most 1.7e-5, is not flagged."""
+    branch = _resonance(N, 0)
+    folds = branch.special_of("LPC")
+    off = [s for s in folds if min(abs(s.lam - f) for f in FOLDS) > 1e-4]
+    assert off  # the case exists on this mesh
+    assert all(branch.flagged[s.index] for s in off), [(s.lam, branch.mesh_error[s.index]) for s in off]
+    first = min(folds, key=lambda s: abs(s.lam - FOLDS[0]))
+    assert abs(first.lam - FOLDS[0]) < 3e-5 and not branch.flagged[first.index]
+
+
 @pytest.mark.parametrize("N, m", [(6, 2), (4, 3)])
 def test_period_doubling_error_estimate_on_a_coarse_uniform_mesh(N, m):
     """half_turn_field with the coupling c u (cont_systems): a PD at exactly lam = 0.4, located on a coarse uniform
@@ -157,3 +205,22 @@ def test_period_doubling_error_estimate_on_a_coarse_uniform_mesh(N, m):
     true = abs(pd[0].lam - 0.4)
     assert true > 1e-4  # a real discretisation error
     assert true / 2 <= pd[0].lam_error <= 2 * true, (true, pd[0].lam_error)
+
+
+def test_mesh_error_is_infinite_where_f_is_undefined_between_the_nodes():
+    """A field that is NaN near the angle 0 of the unit circle (x > 0.999), which the nodes of this orbit miss: its
+    defect is NaN, and a NaN mesh error would pass every comparison with mesh_tol (max() would even drop it), so
+    the estimate is infinite and the point flagged."""
+    def circle(x, lam, args):
+        r2 = x[0] ** 2 + x[1] ** 2
+        rot = jnp.array([x[0] * (1 - r2) - x[1], x[1] * (1 - r2) + x[0]])
+        return jnp.where(x[0] > 0.999, jnp.nan, 1.0) * rot
+    sch, mesh = col.Scheme(4), col.uniform_mesh(8)
+    shift = 1 / 128  # half a node spacing: no node at the angle 0
+
+    def x_of_t(s):
+        return np.stack([np.cos(2 * np.pi * (s + shift)), np.sin(2 * np.pi * (s + shift))], -1)
+    o = col.orbit_from_function(x_of_t, 2 * np.pi, 0.0, sch, mesh)
+    assert np.all(np.asarray(o.nodes())[..., 0] <= 0.999)
+    assert np.isinf(error_estimate(o, sch, circle))
+    assert np.isfinite(error_estimate(o, sch))
