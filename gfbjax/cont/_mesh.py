@@ -18,42 +18,46 @@ between its nodes on that interval, in the units of the state.  Checked against 
 against a tight time integration from its own initial point) on a cycle near an infinite-period limit: the two
 agree within a factor of about 2 over periods from 3.6 to 58 (tests/cont/test_cont_mesh.py).  Mesh values, the
 period and the multipliers of a smooth orbit are more accurate than this (Gauss collocation is superconvergent
-there).
+there).  It can fall short where the orbit is barely resolved: on van der Pol at N = 16 the error sits between the
+nodes of the fast stretch, 3.5-15x above this estimate (found by a fresh-user review; see Limits below).
 
-Kinks, and errors between the nodes.  Where f has a kink (the bearing's exact Gumbel condition max(p - 1, 0))
-the estimate above sees the kink inside an interval only as the polynomial smooths it: on the kinked oscillator of
-the tests the orbit's true error was 12-25x that estimate at omega = 1 (8.6e-4 against 3.4e-5 at N = 16), and up
-to 100x along its resonance branch.  On a smooth orbit whose fast stretch a coarse mesh barely resolves (van der
-Pol at N = 16) it fell 3.5-15x short as well.  The second estimate uses the running defect the collocation
-equations leave inside each interval,
+Kinks.  Where f has a kink (the bearing's exact Gumbel condition max(p - 1, 0)) the estimate above sees the kink
+inside an interval only as the polynomial smooths it: on the kinked oscillator of the tests the orbit's true error
+was 12-25x that estimate at omega = 1 (8.6e-4 against 3.4e-5 at N = 16), and up to 100x along its resonance
+branch.  The second estimate is the defect the collocation equations leave over each interval,
 
-.. math::  D_j(s) = x(t_j + s h_j) - x(t_j) - T \int_{t_j}^{t_j + s h_j} f(x(t), \lambda)\, dt,
-           \qquad \delta_j = D_j(1),
+.. math::  \delta_j = x(t_{j+1}) - x(t_j) - T \int_{t_j}^{t_{j+1}} f(x(t), \lambda)\, dt,
 
-the integrals by a finer quadrature (:data:`SUBINTERVALS` pieces of m + 2 Gauss-Legendre points, D at the pieces'
-ends).  The collocation equations make the m-point quadrature of :math:`\delta_j` vanish, so :math:`\delta_j` is
-the quadrature error of the collocation points on :math:`f(x(t))`: of order :math:`h^{2m+1}` where f(x(t)) is
-smooth, of order :math:`h^2` on an interval where it has a kink.  The orbit's error at the mesh points is what
-these local defects add up to over the period, and between them it grows from there by :math:`D_j(s)` (the
-error e obeys e' = T (f_x e + residual), and over one interval the first term is of higher order).  Their sum
-bounds the leading term; the estimate is the larger of the two, within a factor 2 of the sum,
+the integral by a finer quadrature (:data:`SUBINTERVALS` pieces of m + 2 Gauss-Legendre points).  The collocation
+equations make the m-point quadrature of this integral vanish, so :math:`\delta_j` is the quadrature error of the
+collocation points on :math:`f(x(t))`: of order :math:`h^{2m+1}` where f(x(t)) is smooth (far below the first
+estimate), of order :math:`h^2` on an interval where it has a kink.  The orbit's error at the mesh points is what
+these local defects add up to over the period, so the estimate is :math:`\max_c \sum_j |\delta_{j,c}|` over the
+components c.  "True error" here is the orbit against a tight time integration from its own first node, the
+accuracy of the orbit as a solution.  Near a fold, or wherever a multiplier approaches +1, the distance to the
+exact cycle at the same lam is larger by about 1/|1 - mu| (the problem at fixed lam is ill-conditioned there);
+special points carry their own estimate (``SpecialPoint.lam_error``).  Measured: 0.7-1.4x the true error on the
+kinked oscillator at omega = 1 (N = 16-64) and 0.7-1.5x along its resonance branch (tests/cont/test_cont_mesh.py);
+0.3-5x on other kinked fields in a fresh-user review (abs, a clearance spring, several kinks per period, a kink in
+a fast variable; m = 2-5, Gauss and Radau).  On the GFB, against the orbit on N = 128: 2.5x and 1.3x above it at
+N = 16 and 32 (16x2, Omega_bar 0.38), 3.6x and 2.8x (48x8, Omega_bar 0.95).  Summing each interval's largest
+component instead added kinks of different pressure nodes and was 5-8x above it there.  It costs one evaluation
+of f at N x SUBINTERVALS x (m + 2) points per recorded point.
+:func:`error_estimate` returns the larger of the largest :math:`\varepsilon_j` and (given f) the summed defects of
+the worst component, relative to ``1 + max |x|``.
 
-.. math::  \max_c \max\Big(\sum_j |\delta_{j,c}|,\ \max_{j,s} |D_{j,c}(s)|\Big)
-
-over the components c (the sum itself came out 1.2-1.8x the true error on the kinked oscillator and put a false
-flag at the end of the GFB reference branch).  "True error" here is the orbit against a tight time integration from its own first
-node, the accuracy of the orbit as a solution.  Near a fold, or wherever a multiplier approaches +1, the
-distance to the exact cycle at the same lam is larger by about 1/|1 - mu| (the problem at fixed lam is
-ill-conditioned there); special points carry their own estimate (``SpecialPoint.lam_error``).  Measured
-(tests/cont/test_cont_mesh.py, a fresh-user review, scripts of the session notes): 0.7-1.4x the true error on
-the kinked oscillator at omega = 1 (N = 16-64) and 0.7-1.5x along its resonance branch; 0.7-3.1x on other kinked
-fields (abs, a clearance spring, kinks in a fast variable; m = 4, N = 16 and 32); 0.7-1.3x on van der Pol at mu = 1 and 4 with m = 2-5,
-Gauss and Radau, except where the orbit is not resolved at all (0.25-0.5 where the true error is 0.05-5).  On
-the GFB it is conservative, because the stiff film modes damp the local defects that the sum adds up: against
-the orbit on N = 128, 2.5x and 1.3x above it at N = 16 and 32 (16x2, Omega_bar 0.38), 3.9x and 2.8x (48x8,
-Omega_bar 0.95).  It costs one evaluation of f at
-N x SUBINTERVALS x (m + 2) points per recorded point.  :func:`error_estimate` returns the larger of the largest
-:math:`\varepsilon_j` and (given f) this estimate, relative to ``1 + max |x|``.
+Limits.  Errors between the nodes of a smooth but barely resolved stretch (the van der Pol case above) are not
+covered.  The running defect inside an interval, x(t) - x(t_j) - T int f, estimates them well for non-stiff
+components (0.7-0.8x on van der Pol), but it ignores the damping of stiff components, whose error is about the
+residual divided by their rate, not its integral: on a component with h K = 1.6e4 it said 1.9e-3 for a true
+4.4e-6 and flagged a good point, and on the GFB (film modes) it over-estimated 4-8x; it was tried in session 9
+and withdrawn.  The summed defects share that fault in milder form: a stiff component's defects are its rate times
+a small interpolation error, and the error they cause decays within an interval instead of adding up.  On a
+component x' = -k (x - u^3) driven by a unit-circle oscillator (k = 1e4) the estimate was 28x the true error
+with Radau m = 4, N = 16, 89x with Gauss m = 2 and 1.3e4x with Radau m = 2 (N = 32): conservative, but it flags
+good points.  With Gauss m = 4 it stays below the interpolation estimate there; on the GFB it stays below
+mesh_tol with both point sets (Radau N = 16: 5e-5 at Omega_bar 0.38).  The cure for both limits is to propagate
+the defects through the linearisation (the interval transfer maps damp the stiff parts) instead of summing them.
 
 Equidistribution.  The new mesh gives every interval the same share of :math:`\int e(t)^{1/(m+1)}\,dt`
 (:math:`e` piecewise constant on the old mesh), so that every :math:`\varepsilon_j` comes out about equal; a floor
@@ -72,7 +76,7 @@ import numpy as np
 
 from . import _collocation as col
 
-__all__ = ["interval_errors", "running_defects", "defect_errors", "error_estimate", "equidistributed_mesh", "remesh", "SUBINTERVALS"]
+__all__ = ["interval_errors", "defect_errors", "error_estimate", "equidistributed_mesh", "remesh", "SUBINTERVALS"]
 
 #: pieces of each mesh interval for the defect's quadrature (each with m + 2 Gauss-Legendre points): the sums
 #: came out the same with 16 on the kinked oscillator
@@ -115,51 +119,41 @@ def interval_errors(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=None)
-def _defect_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(B, w, E): the Lagrange basis of the nodes at the fine quadrature points of [0, 1], (S*q, m+1), their
-    weights on each piece (q,), and the basis at the pieces' right ends k/S, (S, m+1)."""
+def _defect_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray]:
+    """(B, w): the Lagrange basis of the nodes at the fine quadrature points of [0, 1], (Q, m+1), and weights (Q,)."""
     g, w = np.polynomial.legendre.leggauss(scheme.m + 2)
     pts = ((np.arange(SUBINTERVALS)[:, None] + 0.5 * (g[None, :] + 1.0)) / SUBINTERVALS).ravel()
-    ends = np.arange(1, SUBINTERVALS + 1) / SUBINTERVALS
-    return scheme.basis_at(pts), 0.5 * w / SUBINTERVALS, scheme.basis_at(ends)
+    return scheme.basis_at(pts), np.tile(0.5 * w, SUBINTERVALS) / SUBINTERVALS
 
 
 @functools.partial(jax.jit, static_argnums=(0,))
-def _running(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
-             B: jax.Array, w: jax.Array, E: jax.Array) -> jax.Array:
+def _defects(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
+             B: jax.Array, w: jax.Array) -> jax.Array:
     X = jnp.einsum("qi,jin->jqn", B, U)
     F = jax.vmap(jax.vmap(lambda x: f(x, lam, args)))(X)
-    pieces = jnp.einsum("q,jpqn->jpn", w, F.reshape(U.shape[0], E.shape[0], w.shape[0], U.shape[2]))
-    return (jnp.einsum("ki,jin->jkn", E, U) - U[:, :1]) - T * h[:, None, None] * jnp.cumsum(pieces, axis=1)
-
-
-def running_defects(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
-    """(N, SUBINTERVALS, n): the running defect D_j(s) = x(t_j + s h_j) - x(t_j) - T int_{t_j}^{t_j + s h_j} f dt
-    at s = 1/S, 2/S, ..., 1 on each interval, by the finer quadrature (module docstring), state units; the last
-    is the defect delta_j.  ``f(x, lam, args)`` is the problem's vector field."""
-    B, w, E = (jnp.asarray(a, orbit.xm.dtype) for a in _defect_rule(scheme))
-    return np.asarray(_running(f, args, orbit.nodes(), jnp.diff(orbit.mesh), orbit.T, orbit.lam, B, w, E), float)
+    return U[:, -1] - U[:, 0] - T * h[:, None] * jnp.einsum("q,jqn->jn", w, F)
 
 
 def defect_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
-    """(N, n): |delta_j|, the defect of the collocation equations on each interval (per component, state units)."""
-    return np.abs(running_defects(f, args, orbit, scheme)[:, -1])
+    """(N, n): |delta_j|, the defect of the collocation equations on each interval by the finer quadrature
+    (module docstring), per component, state units.  ``f(x, lam, args)`` is the problem's vector field."""
+    B, w = _defect_rule(scheme)
+    U = orbit.nodes()
+    d = _defects(f, args, U, jnp.diff(orbit.mesh), orbit.T, orbit.lam, jnp.asarray(B, U.dtype), jnp.asarray(w, U.dtype))
+    return np.abs(np.asarray(d, float))
 
 
 def error_estimate(orbit: col.Orbit, scheme: col.Scheme, f: Callable | None = None, args: Any = None) -> float:
     """The a-posteriori accuracy of a collocation orbit relative to ``1 + max |x|``: the largest interval error
-    (:func:`interval_errors`) or, given the vector field ``f``, the larger of that and the defect estimate
-    max_c (sum_j |delta_j,c| + max_{j,s} |D_j,c(s)|) (:func:`running_defects`, module docstring), which sees
-    kinks of f and the error between the nodes where the interpolation estimate falls short.  Infinite where f is
-    NaN or inf at the quadrature points (an orbit through a region where the field is undefined is not
-    resolved, and a NaN would pass every comparison with a tolerance); a region narrower than their spacing can
-    be missed."""
+    (:func:`interval_errors`) and, given the vector field ``f``, the defects (:func:`defect_errors`) summed over
+    the intervals for the worst component, whichever is larger (the second is the one that sees kinks of f).
+    Infinite where f is NaN or inf at the quadrature points (an orbit through a region where the field is
+    undefined is not resolved, and a NaN would pass every comparison with a tolerance); a region narrower than
+    their spacing can be missed."""
     scale = 1.0 + float(np.max(np.abs(np.asarray(orbit.xm))))
     est = float(np.max(interval_errors(orbit, scheme)))
     if f is not None:
-        D = np.abs(running_defects(f, args, orbit, scheme))
-        inside = D[:, :-1].max(axis=(0, 1)) if D.shape[1] > 1 else 0.0
-        defects = float(np.max(np.maximum(D[:, -1].sum(axis=0), inside)))
+        defects = float(np.max(np.sum(defect_errors(f, args, orbit, scheme), axis=0)))
         est = est if defects <= est else defects  # max() would drop a NaN
     return est / scale if np.isfinite(est) else math.inf
 
