@@ -119,8 +119,8 @@ def test_mesh_error_sees_the_kink(N):
         e = np.exp(2j * np.pi * t)
         return np.stack([np.real(H * e), np.real(1j * w0 * H * e), e.real, -e.imag], -1)
     st = CycleSettings(m=4, N=N)
-    sol, _ = correct_cycle(CycleProblem(kinked_oscillator, 4), start_from_function(x_of_t, 2 * np.pi / w0, w0, st).orbit,
-                           settings=st)
+    guess = start_from_function(x_of_t, 2 * np.pi / w0, w0, st).orbit
+    sol, _ = correct_cycle(CycleProblem(kinked_oscillator, 4), guess, settings=st)
     assert sol.converged
     o, sch = sol.x, col.Scheme(4)
     true = _true_error(kinked_oscillator, o, sch)
