@@ -130,7 +130,7 @@ def _defect_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray]:
 def _defects(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
              B: jax.Array, w: jax.Array) -> jax.Array:
     X = jnp.einsum("qi,jin->jqn", B, U)
-    F = jax.vmap(jax.vmap(lambda x: f(x, lam, args)))(X)
+    F = col._f_batched(f, X, lam, args)
     return U[:, -1] - U[:, 0] - T * h[:, None] * jnp.einsum("q,jqn->jn", w, F)
 
 
