@@ -372,6 +372,7 @@ class CycleCurve(Curve):
 
     def analyse(self, X, lin, tangent):
         an = analyse(self.problem, lin, self.floquet, self.memo)
+        an["linearisation"] = lin  # for the mesh error of the points that are recorded (record)
         if self.monitor is not None:
             an["monitor"] = float(_monitor_min(self.monitor.fn, X, self.problem.args))
         return an
@@ -406,7 +407,7 @@ class CycleCurve(Curve):
         stiff, mu_error = resolution(self.problem.f, X, self.problem.args, self.scheme,
                                      float(np.max(nt, initial=0.0)))
         state = _orbit_state(X) if self.settings.save_states else None
-        mesh_error = error_estimate(X, self.scheme, self.problem.f, self.problem.args)
+        mesh_error = error_estimate(X, self.scheme, self.problem.f, self.problem.args, an["linearisation"])
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
                            an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state,
                            an.get("monitor", float("nan")), mesh_error, stiff, mu_error)

@@ -89,6 +89,11 @@ class Linearisation(abc.ABC):
         collocation right-hand sides c (N, mn) (see :mod:`._sweeps`)."""
 
     @abc.abstractmethod
+    def local_solves(self, c: np.ndarray) -> np.ndarray:
+        """Interior values (N, m-1, n) of the linearised orbit on each interval alone, from a zero left mesh
+        value at fixed (T, lam), with collocation right-hand sides c (N, mn): one block solve per interval."""
+
+    @abc.abstractmethod
     def adjoint_sweep(self, w: np.ndarray) -> np.ndarray:
         """psi (N, mn) with sum_j psi_j . c_j = w . x_N for the sweep from 0 with right-hand sides c."""
 
@@ -228,6 +233,9 @@ class _DenseLinearisation(Linearisation):
 
     def sweep(self, dx0, dp, c=None):
         return self._sweeps().sweep(dx0, dp, c)
+
+    def local_solves(self, c):
+        return self._sweeps().local_solves(c)
 
     def adjoint_sweep(self, w):
         return self._sweeps().adjoint_sweep(w)

@@ -6,58 +6,71 @@ without bound, a bearing orbit with a kink where the film pressure is clipped). 
 can stay at 1 to rounding while the period is wrong in the fourth digit, so the mesh error must be estimated
 on its own.
 
-Estimate (the approach of AUTO's mesh adaptation).  On interval :math:`j` of width :math:`h_j` the collocation
-solution is a polynomial of degree m; its m-th derivative :math:`d_j = \Delta^m U_j / (h_j/m)^m` is constant
-there (:math:`\Delta^m`: the m-th difference of the m+1 equally spaced nodes).  The jumps of :math:`d` between
-neighbouring intervals estimate the (m+1)-th derivative, :math:`e_j \approx |x^{(m+1)}|` on interval j, and
+The orbit's error is estimated three ways, and :func:`error_estimate` reports the largest, relative to
+``1 + max |x|``.  "True error" below is the orbit against a tight time integration from its own first node: the
+accuracy of the orbit as a solution.  Near a fold, or wherever a multiplier approaches +1, the distance to the
+exact cycle at the same lam is larger by about 1/|1 - mu| (the problem at fixed lam is ill-conditioned there);
+special points carry their own estimate (``SpecialPoint.lam_error``).
+
+1. Interpolation (the approach of AUTO's mesh adaptation).  On interval :math:`j` of width :math:`h_j` the
+collocation solution is a polynomial of degree m; its m-th derivative :math:`d_j = \Delta^m U_j / (h_j/m)^m` is
+constant there (:math:`\Delta^m`: the m-th difference of the m+1 equally spaced nodes).  The jumps of :math:`d`
+between neighbouring intervals estimate the (m+1)-th derivative, :math:`e_j \approx |x^{(m+1)}|` on interval j,
+and
 
 .. math::  \varepsilon_j = \frac{h_j^{m+1}\, e_j}{(m+1)!} \max_{s \in [0,1]} \Big|\prod_{i=0}^{m} (s - i/m)\Big|
 
-is the Lagrange remainder of interpolating at the m+1 equally spaced nodes: an estimate of the error of the orbit
-between its nodes on that interval, in the units of the state.  Checked against the true error (the orbit
-against a tight time integration from its own initial point) on a cycle near an infinite-period limit: the two
-agree within a factor of about 2 over periods from 3.6 to 58 (tests/cont/test_cont_mesh.py).  Mesh values, the
-period and the multipliers of a smooth orbit are more accurate than this (Gauss collocation is superconvergent
-there).  It can fall short where the orbit is barely resolved: on van der Pol at N = 16 the error sits between the
-nodes of the fast stretch, 3.5-15x above this estimate (found by a fresh-user review; see Limits below).
+is the Lagrange remainder of interpolating at the m+1 equally spaced nodes (:func:`interval_errors`).  It assumes
+a smooth field, and it drives the equidistribution below.  On a cycle near an infinite-period limit it agrees with
+the true error within a factor of about 2 over periods from 3.6 to 58 (tests/cont/test_cont_mesh.py).  It is
+blind to a kink of f inside an interval (the bearing's exact Gumbel condition max(p - 1, 0)), which the polynomial
+smooths: on the kinked oscillator of the tests the true error was 12-25x this estimate at omega = 1, up to 100x
+along its resonance branch.  It also falls short where the mesh barely resolves a fast stretch: 0.06-0.4x on van
+der Pol (mu = 1, N = 16).
 
-Kinks.  Where f has a kink (the bearing's exact Gumbel condition max(p - 1, 0)) the estimate above sees the kink
-inside an interval only as the polynomial smooths it: on the kinked oscillator of the tests the orbit's true error
-was 12-25x that estimate at omega = 1 (8.6e-4 against 3.4e-5 at N = 16), and up to 100x along its resonance
-branch.  The second estimate is the defect the collocation equations leave over each interval,
+2. Propagated defects (:func:`propagated_errors`).  The running defect of interval j,
 
-.. math::  \delta_j = x(t_{j+1}) - x(t_j) - T \int_{t_j}^{t_{j+1}} f(x(t), \lambda)\, dt,
+.. math::  D_j(s) = x(t_j + s h_j) - x(t_j) - T \int_{t_j}^{t_j + s h_j} f(x(t), \lambda)\, dt,
 
-the integral by a finer quadrature (:data:`SUBINTERVALS` pieces of m + 2 Gauss-Legendre points).  The collocation
-equations make the m-point quadrature of this integral vanish, so :math:`\delta_j` is the quadrature error of the
-collocation points on :math:`f(x(t))`: of order :math:`h^{2m+1}` where f(x(t)) is smooth (far below the first
-estimate), of order :math:`h^2` on an interval where it has a kink.  The orbit's error at the mesh points is what
-these local defects add up to over the period, so the estimate is :math:`\max_c \sum_j |\delta_{j,c}|` over the
-components c.  "True error" here is the orbit against a tight time integration from its own first node, the
-accuracy of the orbit as a solution.  Near a fold, or wherever a multiplier approaches +1, the distance to the
-exact cycle at the same lam is larger by about 1/|1 - mu| (the problem at fixed lam is ill-conditioned there);
-special points carry their own estimate (``SpecialPoint.lam_error``).  Measured: 0.7-1.4x the true error on the
-kinked oscillator at omega = 1 (N = 16-64) and 0.7-1.5x along its resonance branch (tests/cont/test_cont_mesh.py);
-0.3-5x on other kinked fields in a fresh-user review (abs, a clearance spring, several kinks per period, a kink in
-a fast variable; m = 2-5, Gauss and Radau).  On the GFB, against the orbit on N = 128: 2.5x and 1.3x above it at
-N = 16 and 32 (16x2, Omega_bar 0.38), 3.6x and 2.8x (48x8, Omega_bar 0.95).  Summing each interval's largest
-component instead added kinks of different pressure nodes and was 5-8x above it there.  It costs one evaluation
-of f at N x SUBINTERVALS x (m + 2) points per recorded point.
-:func:`error_estimate` returns the larger of the largest :math:`\varepsilon_j` and (given f) the summed defects of
-the worst component, relative to ``1 + max |x|``.
+is evaluated at the interval's nodes by a finer quadrature (m + 2 Gauss-Legendre points on each node spacing,
+:func:`running_defects`); at s = 1 it is the interval's defect :math:`\delta_j`.  The collocation equations make
+the m-point quadrature of :math:`\delta_j` vanish, so :math:`\delta_j` is of order :math:`h^{2m+1}` where f(x(t))
+is smooth and of order :math:`h^2` on an interval that holds a kink; inside the interval :math:`D_j` is of the
+order of the interpolation error.  The orbit's error obeys the linearised equation forced by the derivative of
+:math:`D_j` (the residual of the polynomials), so the defects are passed through the orbit's linearisation (its
+interval sweeps, :mod:`._linear`): each :math:`\delta_j` is carried from interval to interval, and the rest of
+:math:`D_j` goes through interval j's own collocation block only.  Where a component is slow the result is about
+the running defect, added up over the period; where it is strongly damped (h |f_x| >> 1: the film modes) the
+implicit collocation step damps its share, so that the estimate does not grow with the stiffness.  Summing
+:math:`|\delta_j|` instead (session 9) ignored that damping and flagged good points: 28x to 1.3e4x the true error
+on a component x' = -k (x - u^3) with k = 1e4; the running defect alone without the damping gave 400x.
 
-Limits.  Errors between the nodes of a smooth but barely resolved stretch (the van der Pol case above) are not
-covered.  The running defect inside an interval, x(t) - x(t_j) - T int f, estimates them well for non-stiff
-components (0.7-0.8x on van der Pol), but it ignores the damping of stiff components, whose error is about the
-residual divided by their rate, not its integral: on a component with h K = 1.6e4 it said 1.9e-3 for a true
-4.4e-6 and flagged a good point, and on the GFB (film modes) it over-estimated 4-8x; it was tried in session 9
-and withdrawn.  The summed defects share that fault in milder form: a stiff component's defects are its rate times
-a small interpolation error, and the error they cause decays within an interval instead of adding up.  On a
-component x' = -k (x - u^3) driven by a unit-circle oscillator (k = 1e4) the estimate was 28x the true error
-with Radau m = 4, N = 16, 89x with Gauss m = 2 and 1.3e4x with Radau m = 2 (N = 32): conservative, but it flags
-good points.  With Gauss m = 4 it stays below the interpolation estimate there; on the GFB it stays below
-mesh_tol with both point sets (Radau N = 16: 5e-5 at Omega_bar 0.38).  The cure for both limits is to propagate
-the defects through the linearisation (the interval transfer maps damp the stiff parts) instead of summing them.
+3. Mesh values with Gauss points (:func:`mesh_value_errors`).  A component with h |f_x| >> 1 is accurate at the
+Gauss points, but the mesh value is the polynomial extrapolated from the last Gauss point to the interval's end,
+and Gauss collocation does not damp what that extrapolation gets wrong (its stability function tends to
+(-1)^m): the mesh values of such a component lose the method's order, and no defect shows it.  The polynomial
+through the m Gauss-point values on each side of a mesh point gives an independent value there; where f is
+smooth and slow the two agree to the accuracy of the Gauss-point values.  With Radau points the mesh point is a
+collocation point and this term is zero.
+
+Measured, estimate / true error:
+
+- kinked oscillator, omega = 1, N = 16 / 32 / 64: 0.82 / 0.70 / 0.69 (the interpolation estimate alone: 0.04 /
+  0.06 / 0.08);
+- van der Pol, mu = 1, N = 16: 0.75-0.80 (Gauss), 0.65-0.71 (Radau), with two time origins;
+- a stiff component (k = 1e4) driven by a unit-circle oscillator: Radau m = 4, N = 16: 0.76; Radau m = 2,
+  N = 32: 0.61; Gauss m = 2 and m = 4, N = 32: 1.02 and 1.00 (the third estimate);
+- the cycle near the infinite-period limit, T = 3.6 / 40 / 100 / 140: 1.34 / 0.92 / 0.79 / 0.69;
+- the GFB against the orbit on N = 128: 16x2 at Omega_bar 0.38, N = 16 / 32: 0.84 / 1.43; 48x8 at 0.95,
+  N = 16 / 32: 0.89 / 0.72 (the summed defects of session 9: 2.5 / 1.3 and 3.6 / 2.8).
+
+Cost per recorded point: one evaluation of f at N m (m + 2) points, one sweep and N block solves on the
+linearisation the corrector already factorised.
+
+Limits.  The second and third estimates are evaluated at the nodes; between the nodes only the first looks, so an
+error that peaks between the nodes of a barely resolved stretch is seen at the nearest node (van der Pol above:
+0.65-0.8).  Every factor above is below 1.5: the estimate is not conservative, a point with an error a little
+above mesh_tol can pass.
 
 Equidistribution.  The new mesh gives every interval the same share of :math:`\int e(t)^{1/(m+1)}\,dt`
 (:math:`e` piecewise constant on the old mesh), so that every :math:`\varepsilon_j` comes out about equal; a floor
@@ -75,12 +88,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _collocation as col
+from ._linear import DenseCondensation
+from ._problem import CycleProblem
 
-__all__ = ["interval_errors", "defect_errors", "error_estimate", "equidistributed_mesh", "remesh", "SUBINTERVALS"]
+__all__ = ["interval_errors", "mesh_value_errors", "running_defects", "defect_errors", "propagated_errors",
+           "error_estimate", "equidistributed_mesh", "remesh"]
 
-#: pieces of each mesh interval for the defect's quadrature (each with m + 2 Gauss-Legendre points): the sums
-#: came out the same with 16 on the kinked oscillator
-SUBINTERVALS = 4
 # density floor, as a fraction of the mean density (keeps every stretch of the period resolved)
 _FLOOR = 0.1
 
@@ -118,43 +131,96 @@ def interval_errors(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
     return h ** (m + 1) * e * _node_polynomial_max(m) / math.factorial(m + 1)
 
 
+def mesh_value_errors(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
+    """(N, n): at each mesh point t_{j+1} (j = 0..N-1), the distance of the orbit's value from the polynomial
+    through the m collocation-point values of the interval before it and the m of the interval after it
+    (periodic), state units (module docstring).  Zero for Radau points, whose last collocation point is the
+    mesh point."""
+    U = np.asarray(orbit.nodes(), float)
+    if scheme.points[-1] == 1.0:
+        return np.zeros((orbit.N, orbit.n))
+    h = np.diff(np.asarray(orbit.mesh, float))
+    S = np.einsum("ki,jin->jkn", scheme.l, U)  # (N, m, n): the values at the collocation points
+    # the times of the 2m points relative to the mesh point between them, and their Lagrange basis there
+    t = np.concatenate([(scheme.points - 1.0)[None, :] * h[:, None], scheme.points[None, :] * np.roll(h, -1)[:, None]],
+                       axis=1)  # (N, 2m)
+    others = ~np.eye(t.shape[1], dtype=bool)
+    ratio = np.where(others, -t[:, None, :] / np.where(others, t[:, :, None] - t[:, None, :], 1.0), 1.0)
+    weights = np.prod(ratio, axis=2)  # (N, 2m): prod over b != a of (0 - t_b) / (t_a - t_b)
+    near = np.concatenate([S, np.roll(S, -1, axis=0)], axis=1)  # (N, 2m, n)
+    return np.abs(np.einsum("ja,jan->jn", weights, near) - U[:, -1])
+
+
 @functools.lru_cache(maxsize=None)
-def _defect_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray]:
-    """(B, w): the Lagrange basis of the nodes at the fine quadrature points of [0, 1], (Q, m+1), and weights (Q,)."""
-    g, w = np.polynomial.legendre.leggauss(scheme.m + 2)
-    pts = ((np.arange(SUBINTERVALS)[:, None] + 0.5 * (g[None, :] + 1.0)) / SUBINTERVALS).ravel()
-    return scheme.basis_at(pts), np.tile(0.5 * w, SUBINTERVALS) / SUBINTERVALS
+def _running_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray]:
+    """(B, w): the Lagrange basis of the nodes at m + 2 Gauss-Legendre points on each of the m node spacings of
+    [0, 1], (m (m+2), m+1), and the weights of those points for the integral over their own spacing, (m+2,)."""
+    m = scheme.m
+    g, w = np.polynomial.legendre.leggauss(m + 2)
+    pts = ((np.arange(m)[:, None] + 0.5 * (g[None, :] + 1.0)) / m).ravel()
+    return scheme.basis_at(pts), 0.5 * w / m
 
 
 @functools.partial(jax.jit, static_argnums=(0,))
-def _defects(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
+def _running(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
              B: jax.Array, w: jax.Array) -> jax.Array:
-    X = jnp.einsum("qi,jin->jqn", B, U)
-    F = col._f_batched(f, X, lam, args)
-    return U[:, -1] - U[:, 0] - T * h[:, None] * jnp.einsum("q,jqn->jn", w, F)
+    N, m1, n = U.shape
+    F = col._f_batched(f, jnp.einsum("qi,jin->jqn", B, U), lam, args).reshape(N, m1 - 1, -1, n)
+    integral = T * h[:, None, None] * jnp.cumsum(jnp.einsum("q,jiqn->jin", w, F), axis=1)
+    D = U[:, 1:] - U[:, :1] - integral
+    return jnp.concatenate([jnp.zeros_like(D[:, :1]), D], axis=1)
+
+
+def running_defects(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
+    """(N, m+1, n): the running defect D_j(s_i) of each interval at its nodes (module docstring), state units;
+    ``D[:, 0]`` is 0 and ``D[:, m]`` the interval's defect.  ``f(x, lam, args)`` is the problem's vector field."""
+    B, w = _running_rule(scheme)
+    U = orbit.nodes()
+    return np.asarray(_running(f, args, U, jnp.diff(orbit.mesh), orbit.T, orbit.lam, jnp.asarray(B, U.dtype),
+                               jnp.asarray(w, U.dtype)), float)
 
 
 def defect_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
-    """(N, n): |delta_j|, the defect of the collocation equations on each interval by the finer quadrature
-    (module docstring), per component, state units.  ``f(x, lam, args)`` is the problem's vector field."""
-    B, w = _defect_rule(scheme)
-    U = orbit.nodes()
-    d = _defects(f, args, U, jnp.diff(orbit.mesh), orbit.T, orbit.lam, jnp.asarray(B, U.dtype), jnp.asarray(w, U.dtype))
-    return np.abs(np.asarray(d, float))
+    """(N, n): |delta_j|, the defect of the collocation equations over each interval (module docstring)."""
+    return np.abs(running_defects(f, args, orbit, scheme)[:, -1])
 
 
-def error_estimate(orbit: col.Orbit, scheme: col.Scheme, f: Callable | None = None, args: Any = None) -> float:
+def propagated_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin: Any = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """The orbit's error as the linearised flow carries the defects from its first node (module docstring):
+    (mesh values (N+1, n), interior nodes (N, m-1, n)), state units; NaN where f is not finite at the quadrature
+    points.  ``lin``: the orbit's :class:`~._linear.Linearisation` (its constraint rows do not matter: T and lam
+    are held fixed); default: a dense one made here, which costs O(N (mn)^3)."""
+    D = running_defects(f, args, orbit, scheme)
+    N, n = orbit.N, orbit.n
+    if not np.all(np.isfinite(D)):
+        return np.full((N + 1, n), np.nan), np.full((N, scheme.m - 1, n), np.nan)
+    if lin is None:
+        lin = DenseCondensation().bind(CycleProblem(f, n, args), scheme).linearise(orbit)
+    delta = D[:, -1]
+    # From one interval to the next only its defect is carried, as a forcing spread evenly over the interval.
+    xs, ws = lin.sweep(np.zeros(n), np.zeros(2), np.repeat(delta[:, None, :], scheme.m, axis=1).reshape(N, -1))
+    # Inside the interval, the rest of the running defect, through the interval's own block: the collocation
+    # right-hand sides whose polynomial (0 at the first node) takes its values at the other nodes.  Its value at
+    # the interval's end is dropped: there the integral by the finer quadrature (the defect) is the better one.
+    rest = D - scheme.nodes[None, :, None] * delta[:, None, :]
+    return xs, ws + lin.local_solves(np.einsum("ki,jin->jkn", scheme.dl, rest).reshape(N, -1))
+
+
+def error_estimate(orbit: col.Orbit, scheme: col.Scheme, f: Callable | None = None, args: Any = None,
+                   lin: Any = None) -> float:
     """The a-posteriori accuracy of a collocation orbit relative to ``1 + max |x|``: the largest interval error
-    (:func:`interval_errors`) and, given the vector field ``f``, the defects (:func:`defect_errors`) summed over
-    the intervals for the worst component, whichever is larger (the second is the one that sees kinks of f).
-    Infinite where f is NaN or inf at the quadrature points (an orbit through a region where the field is
-    undefined is not resolved, and a NaN would pass every comparison with a tolerance); a region narrower than
-    their spacing can be missed."""
+    (:func:`interval_errors`) and, given the vector field ``f``, the largest propagated error
+    (:func:`propagated_errors`, with the linearisation ``lin`` where given), whichever is larger (the second sees
+    kinks of f, and errors between the nodes of a barely resolved stretch).  Infinite where f is NaN or inf at
+    the quadrature points (an orbit through a region where the field is undefined is not resolved, and a NaN
+    would pass every comparison with a tolerance); a region narrower than their spacing can be missed."""
     scale = 1.0 + float(np.max(np.abs(np.asarray(orbit.xm))))
-    est = float(np.max(interval_errors(orbit, scheme)))
+    est = max(float(np.max(interval_errors(orbit, scheme))), float(np.max(mesh_value_errors(orbit, scheme))))
     if f is not None:
-        defects = float(np.max(np.sum(defect_errors(f, args, orbit, scheme), axis=0)))
-        est = est if defects <= est else defects  # max() would drop a NaN
+        xs, ws = propagated_errors(f, args, orbit, scheme, lin)
+        prop = max(float(np.max(np.abs(xs))), float(np.max(np.abs(ws), initial=0.0)))
+        est = est if prop <= est else prop  # max() would drop a NaN
     return est / scale if np.isfinite(est) else math.inf
 
 

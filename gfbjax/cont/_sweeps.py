@@ -78,6 +78,11 @@ class IntervalSweeps(Linearisation):
             xs[j + 1] = x = z[k:]
         return xs, ws.reshape(N, self.m - 1, self.n)
 
+    def local_solves(self, c: np.ndarray) -> np.ndarray:
+        k = (self.m - 1) * self.n
+        return np.stack([lu.solve(cj)[:k] for lu, cj in zip(self.lus, c)]).reshape(len(self.lus), self.m - 1,
+                                                                                   self.n)
+
     def adjoint_sweep(self, w: np.ndarray) -> np.ndarray:
         """psi (N, mn) with sum_j psi_j . c_j = w . x_N for the sweep from x_0 = 0, dp = 0 with right-hand sides c:
         the transposed blocks from the last interval back (M^T w is then -A_{L,0}^T psi_0)."""
