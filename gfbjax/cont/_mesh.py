@@ -7,10 +7,15 @@ can stay at 1 to rounding while the period is wrong in the fourth digit, so the 
 on its own.
 
 The orbit's error is estimated three ways, and :func:`error_estimate` reports the largest, relative to
-``1 + max |x|``.  "True error" below is the orbit against a tight time integration from its own first node: the
-accuracy of the orbit as a solution.  Near a fold, or wherever a multiplier approaches +1, the distance to the
-exact cycle at the same lam is larger by about 1/|1 - mu| (the problem at fixed lam is ill-conditioned there);
-special points carry their own estimate (``SpecialPoint.lam_error``).
+``1 + max |x|`` (so on a field whose largest component is a velocity, that component sets the scale).  What is
+estimated is the orbit's distance from the exact cycle: the cycle that satisfies the same phase and continuation
+conditions, at the same lam away from folds.  It is measured below against the same cycle corrected on N = 512
+intervals ("dist").  On a stable cycle that is about the orbit's error against a tight time integration from its
+own first node ("ivp"); on an unstable one the time integration amplifies the orbit's error by the unstable
+multiplier, up to 1e3x on the cases below, while the orbit stays close to the cycle.  Near a fold, or wherever a
+multiplier approaches +1, the distance to the exact cycle at the same lam is larger by about 1/|1 - mu| (the
+problem at fixed lam is ill-conditioned there); with the continuation condition the estimate measures the distance
+across the branch, and special points carry their own estimate (``SpecialPoint.lam_error``).
 
 1. Interpolation (the approach of AUTO's mesh adaptation).  On interval :math:`j` of width :math:`h_j` the
 collocation solution is a polynomial of degree m; its m-th derivative :math:`d_j = \Delta^m U_j / (h_j/m)^m` is
@@ -37,13 +42,16 @@ is evaluated at the interval's nodes by a finer quadrature (m + 2 Gauss-Legendre
 the m-point quadrature of :math:`\delta_j` vanish, so :math:`\delta_j` is of order :math:`h^{2m+1}` where f(x(t))
 is smooth and of order :math:`h^2` on an interval that holds a kink; inside the interval :math:`D_j` is of the
 order of the interpolation error.  The orbit's error obeys the linearised equation forced by the derivative of
-:math:`D_j` (the residual of the polynomials), so the defects are passed through the orbit's linearisation (its
-interval sweeps, :mod:`._linear`): each :math:`\delta_j` is carried from interval to interval, and the rest of
-:math:`D_j` goes through interval j's own collocation block only.  Where a component is slow the result is about
-the running defect, added up over the period; where it is strongly damped (h |f_x| >> 1: the film modes) the
-implicit collocation step damps its share, so that the estimate does not grow with the stiffness.  Summing
+:math:`D_j` (the residual of the polynomials), so the defects are passed through the orbit's linearisation (the
+Newton system the corrector has already factorised, :mod:`._linear`): each :math:`\delta_j`, spread evenly over its
+interval, forces the periodic problem with the orbit's phase and continuation rows, and the rest of :math:`D_j`
+goes through interval j's own collocation block only.  Where a component is slow the result is about the running
+defect, added up along the orbit; where it is strongly damped (h |f_x| >> 1: the film modes) the implicit
+collocation step damps its share, so that the estimate does not grow with the stiffness.  Summing
 :math:`|\delta_j|` instead (session 9) ignored that damping and flagged good points: 28x to 1.3e4x the true error
-on a component x' = -k (x - u^3) with k = 1e4; the running defect alone without the damping gave 400x.
+on a component x' = -k (x - u^3) with k = 1e4; the running defect alone without the damping gave 400x.  Carrying
+the defects from the first node as an initial-value problem (a first version of session 10) let them grow with an
+unstable multiplier: 135x and 290x the distance on the reversed van der Pol cycle below (multiplier 7.9e7).
 
 3. Mesh values with Gauss points (:func:`mesh_value_errors`).  A component with h |f_x| >> 1 is accurate at the
 Gauss points, but the mesh value is the polynomial extrapolated from the last Gauss point to the interval's end,
@@ -53,24 +61,31 @@ through the m Gauss-point values on each side of a mesh point gives an independe
 smooth and slow the two agree to the accuracy of the Gauss-point values.  With Radau points the mesh point is a
 collocation point and this term is zero.
 
-Measured, estimate / true error:
+Measured, estimate / dist (scripts quoted in the closing note of session 10):
 
-- kinked oscillator, omega = 1, N = 16 / 32 / 64: 0.82 / 0.70 / 0.69 (the interpolation estimate alone: 0.04 /
-  0.06 / 0.08);
-- van der Pol, mu = 1, N = 16: 0.75-0.80 (Gauss), 0.65-0.71 (Radau), with two time origins;
-- a stiff component (k = 1e4) driven by a unit-circle oscillator: Radau m = 4, N = 16: 0.76; Radau m = 2,
-  N = 32: 0.61; Gauss m = 2 and m = 4, N = 32: 1.02 and 1.00 (the third estimate);
-- the cycle near the infinite-period limit, T = 3.6 / 40 / 100 / 140: 1.34 / 0.92 / 0.79 / 0.69;
+- kinked oscillator, omega = 1, N = 16 / 32 / 64: 0.80 / 0.79 / 0.92 (the interpolation estimate alone: 0.04 /
+  0.05 / 0.09);
+- van der Pol, mu = 1, N = 16: 0.80 (Gauss), 0.71 (Radau);
+- van der Pol reversed in time (unstable, multipliers 1.2e3 at mu = 1 and 7.9e7 at mu = 2), m = 4, Gauss and
+  Radau: 0.84-1.05 at N = 16, 32, 128;
+- a strongly damped component x' = -k (x - u^3), k = 1e4, driven by a unit-circle oscillator: Radau m = 4, N = 16:
+  0.81; Radau m = 2, N = 32: 0.71; Gauss m = 2 and m = 4, N = 32: 1.02 and 1.00 (the third estimate);
+- the cycle near the infinite-period limit, T = 3.6 / 40 / 100 / 140, adapted mesh (against ivp): 1.34 / 0.92 /
+  0.79 / 0.69;
 - the GFB against the orbit on N = 128: 16x2 at Omega_bar 0.38, N = 16 / 32: 0.84 / 1.43; 48x8 at 0.95,
-  N = 16 / 32: 0.89 / 0.72 (the summed defects of session 9: 2.5 / 1.3 and 3.6 / 2.8).
+  N = 16 / 32: 0.89 / 0.72 (the summed defects of session 9: 2.5 / 1.3 and 3.6 / 2.8);
+- a fresh-user review of the first version tried other kinked and discontinuous fields (|x|, several kinks per
+  period, a relay sign(v), a dead zone), stiffness off the diagonal of f_x, adapted meshes and coarse N: 0.45-2.7
+  on stable cycles; a stiff contact spring with Radau points, m = 2, was 0.2-0.3x at N = 64-128 (true error
+  6.7e-3, flagged all the same).
 
-Cost per recorded point: one evaluation of f at N m (m + 2) points, one sweep and N block solves on the
-linearisation the corrector already factorised.
+Cost per recorded point: one evaluation of f at N m (m + 2) points, one solve of the Newton system (with the
+sparse solver, a GMRES of about 16 sweeps) and N block solves, all on the factorisation the corrector already has.
 
 Limits.  The second and third estimates are evaluated at the nodes; between the nodes only the first looks, so an
 error that peaks between the nodes of a barely resolved stretch is seen at the nearest node (van der Pol above:
-0.65-0.8).  Every factor above is below 1.5: the estimate is not conservative, a point with an error a little
-above mesh_tol can pass.
+0.7-0.8).  The estimate is not conservative: most factors above are below 1, and a point with an error a little
+above mesh_tol can pass (the review found |x|-kinked orbits at 1.0-1.8e-4 unflagged).
 
 Equidistribution.  The new mesh gives every interval the same share of :math:`\int e(t)^{1/(m+1)}\,dt`
 (:math:`e` piecewise constant on the old mesh), so that every :math:`\varepsilon_j` comes out about equal; a floor
@@ -89,6 +104,7 @@ import numpy as np
 
 from . import _collocation as col
 from ._linear import DenseCondensation
+from ._newton import LinearSolveError
 from ._problem import CycleProblem
 
 __all__ = ["interval_errors", "mesh_value_errors", "running_defects", "defect_errors", "propagated_errors",
@@ -136,9 +152,9 @@ def mesh_value_errors(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
     through the m collocation-point values of the interval before it and the m of the interval after it
     (periodic), state units (module docstring).  Zero for Radau points, whose last collocation point is the
     mesh point."""
-    U = np.asarray(orbit.nodes(), float)
-    if scheme.points[-1] == 1.0:
+    if scheme.kind == "radau":
         return np.zeros((orbit.N, orbit.n))
+    U = np.asarray(orbit.nodes(), float)
     h = np.diff(np.asarray(orbit.mesh, float))
     S = np.einsum("ki,jin->jkn", scheme.l, U)  # (N, m, n): the values at the collocation points
     # the times of the 2m points relative to the mesh point between them, and their Lagrange basis there
@@ -187,24 +203,31 @@ def defect_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) 
 
 def propagated_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin: Any = None
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """The orbit's error as the linearised flow carries the defects from its first node (module docstring):
-    (mesh values (N+1, n), interior nodes (N, m-1, n)), state units; NaN where f is not finite at the quadrature
-    points.  ``lin``: the orbit's :class:`~._linear.Linearisation` (its constraint rows do not matter: T and lam
-    are held fixed); default: a dense one made here, which costs O(N (mn)^3)."""
+    """The orbit's distance from the exact cycle, from its defects carried through the linearisation (module
+    docstring): (mesh values (N+1, n), interior nodes (N, m-1, n)), state units; NaN where f is not finite at the
+    quadrature points or the linear solve fails.  ``lin``: the orbit's :class:`~._linear.Linearisation`; its
+    constraint rows (phase, continuation) say which exact cycle the orbit is compared with.  Default: a dense one
+    made here at fixed lam (the exact cycle at the same lam), which costs O(N (mn)^3)."""
     D = running_defects(f, args, orbit, scheme)
     N, n = orbit.N, orbit.n
+    failed = np.full((N + 1, n), np.nan), np.full((N, scheme.m - 1, n), np.nan)
     if not np.all(np.isfinite(D)):
-        return np.full((N + 1, n), np.nan), np.full((N, scheme.m - 1, n), np.nan)
+        return failed
     if lin is None:
         lin = DenseCondensation().bind(CycleProblem(f, n, args), scheme).linearise(orbit)
     delta = D[:, -1]
-    # From one interval to the next only its defect is carried, as a forcing spread evenly over the interval.
-    xs, ws = lin.sweep(np.zeros(n), np.zeros(2), np.repeat(delta[:, None, :], scheme.m, axis=1).reshape(N, -1))
+    # From one interval to the next only its defect is carried, as a forcing spread evenly over the interval, by
+    # the periodic problem (the orbit's own Newton system): unstable directions do not grow from a start point.
+    try:
+        e = lin.solve(np.repeat(delta[:, None, :], scheme.m, axis=1), np.zeros(n), np.zeros(2))
+    except LinearSolveError:
+        return failed
     # Inside the interval, the rest of the running defect, through the interval's own block: the collocation
     # right-hand sides whose polynomial (0 at the first node) takes its values at the other nodes.  Its value at
     # the interval's end is dropped: there the integral by the finer quadrature (the defect) is the better one.
     rest = D - scheme.nodes[None, :, None] * delta[:, None, :]
-    return xs, ws + lin.local_solves(np.einsum("ki,jin->jkn", scheme.dl, rest).reshape(N, -1))
+    local = lin.local_solves(np.einsum("ki,jin->jkn", scheme.dl, rest).reshape(N, -1))
+    return np.asarray(e.xm, float), np.asarray(e.xi, float) + local
 
 
 def error_estimate(orbit: col.Orbit, scheme: col.Scheme, f: Callable | None = None, args: Any = None,
