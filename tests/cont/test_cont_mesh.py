@@ -358,3 +358,68 @@ def test_propagated_errors_agree_between_the_dense_and_sparse_linearisations():
     for a, b in zip(*out):
         np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-12 * np.max(np.abs(a)))
     assert np.max(np.abs(out[0][0])) > 1e-4  # the kink's error, not rounding
+
+
+def _grazing_contact(x, w, k):
+    """A damped oscillator (x, v) forced by a unit-circle oscillator (u, s), with a spring of stiffness k beyond
+    x = 0.5 (a contact), the forcing tuned so that the cycle just grazes it."""
+    X, v, u, s = x
+    r2 = u * u + s * s
+    return jnp.array([v, -0.1 * v - X - k * jnp.maximum(X - 0.5, 0.0) + 0.3 * u, u + w * s - u * r2,
+                      -w * u + s - s * r2])
+
+
+def _grazing_monodromy(x0, w, k, T):
+    """The exact monodromy matrix: the variational equation integrated with the contact's switching times located
+    as events (the Jacobian jumps there), from a point x0 of the cycle."""
+    def rhs(t, y, kk):
+        X, v, u, s = y[:4]
+        r2 = u * u + s * s
+        fx = [v, -0.1 * v - X - kk * (X - 0.5) + 0.3 * u, u + w * s - u * r2, -w * u + s - s * r2]
+        J = np.array([[0, 1, 0, 0], [-1 - kk, -0.1, 0.3, 0], [0, 0, 1 - 3 * u * u - s * s, w - 2 * u * s],
+                      [0, 0, -w - 2 * u * s, 1 - u * u - 3 * s * s]])
+        return np.concatenate([fx, (J @ y[4:].reshape(4, 4)).ravel()])
+
+    def switch(t, y, kk):
+        return y[0] - 0.5
+    switch.terminal = True
+    t, y, inside = 0.0, np.concatenate([x0, np.eye(4).ravel()]), x0[0] > 0.5
+    while t < T:
+        switch.direction = -1.0 if inside else 1.0
+        sol = solve_ivp(rhs, (t, T), y, args=(k if inside else 0.0,), events=switch, rtol=1e-12, atol=1e-13,
+                        method="DOP853")
+        t, y, inside = sol.t[-1], sol.y[:, -1], inside != (sol.status == 1)
+    assert np.max(np.abs(y[:4] - x0)) < 1e-6  # x0 lies on the cycle
+    return y[4:].reshape(4, 4)
+
+
+@pytest.fixture(scope="module")
+def grazing_cycle():
+    """(t, x(t), T, exact multipliers) of the grazing cycle, from a settled time integration."""
+    w0, k = 0.8, 1e3
+    T = 2 * np.pi / w0
+    rhs = jax.jit(_grazing_contact)
+
+    def g(t, x):
+        return np.asarray(rhs(jnp.asarray(x), w0, k))
+    x1 = solve_ivp(g, (0, 40 * T), [0.0, 0.0, 1.0, 0.0], rtol=1e-10, atol=1e-12, method="Radau").y[:, -1]
+    tt = np.linspace(0, T, 4000)
+    X = solve_ivp(g, (0, T), x1, t_eval=tt, rtol=1e-10, atol=1e-12, method="Radau").y.T
+    return tt, X, T, np.linalg.eigvals(_grazing_monodromy(x1, w0, k, T))
+
+
+@pytest.mark.parametrize("m, N, collocation", [(2, 256, "radau"), (4, 64, "radau"), (4, 1024, "gauss")])
+def test_wrong_multipliers_at_a_grazing_contact_lie_on_flagged_points(grazing_cycle, m, N, collocation):
+    """A stiff contact (k = 1e3) that the cycle grazes (0.01 deep): the exact multipliers, from the variational
+    equation with the switches located as events, are a complex pair of modulus 0.675 (stable; their product is
+    exp(-0.1 T), as Liouville's formula requires).  Collocation gets them badly wrong here, and calls the cycle
+    unstable: a real pair 5.9 and 0.073 (Radau m = 2, N = 256), 10.8 and 0.039 (Radau m = 4, N = 64), 1.16 and
+    0.39 (Gauss m = 4, N = 1024), while the trivial multiplier is exact to 1e-14.  None of this is reported with
+    confidence: the orbit's mesh error is 3.7e-4 to 1.1e-2 there, and the points are flagged.  (Found by a
+    fresh-user review of session 10; the multiplier estimate itself does not see kinks of f_x.)"""
+    tt, X, T, exact = grazing_cycle
+    exact_stable = bool(np.sum(np.abs(exact) > 1 - 1e-6) == 1)  # only the trivial multiplier on the circle
+    assert exact_stable
+    st = CycleSettings(m=m, N=N, collocation=collocation, max_points=1)
+    br = continue_cycles(CycleProblem(_grazing_contact, 4, jnp.asarray(1e3)), st, start_from_samples(tt, X, T, 0.8, st))
+    assert bool(br.stable[0]) == exact_stable or bool(br.flagged[0]), (br.multipliers[0], br.mesh_error[0])
