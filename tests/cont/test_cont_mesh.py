@@ -67,8 +67,8 @@ def _true_error(f, o, sch, args=None, stiff=False):
     (``stiff``: an implicit integrator with the exact Jacobian)."""
     t, X = col.evaluate(o, sch, 16)
     lam, T = float(o.lam), float(o.T)
-    rhs = jax.jit(f)
-    opts = dict(method="Radau", rtol=1e-11, jac=lambda tt, x: np.asarray(jax.jacfwd(rhs)(jnp.asarray(x), lam, args))) \
+    rhs, jac = jax.jit(f), jax.jit(jax.jacfwd(f))  # compiled once, not traced at every step of the integrator
+    opts = dict(method="Radau", rtol=1e-11, jac=lambda tt, x: np.asarray(jac(jnp.asarray(x), lam, args))) \
         if stiff else dict(method="DOP853", rtol=1e-12)
     ref = solve_ivp(lambda tt, x: np.asarray(rhs(jnp.asarray(x), lam, args)), (0, T), X[0], t_eval=t * T,
                     atol=1e-13, **opts).y.T
