@@ -348,8 +348,8 @@ class Branch:
                                       "stiff_tol": float(self.stiff_tol)})
         if self.multiplier_error is not None:
             data["multiplier_error"] = (("point",), np.asarray(self.multiplier_error, float),
-                                        {"long_name": "estimated error of the visible modes' Floquet multipliers on "
-                                                      "this mesh (frozen-coefficient model)",
+                                        {"long_name": "estimated error of the deciding Floquet multipliers on this "
+                                                      "mesh (frozen-coefficient model and mode defects)",
                                          "multiplier_tol": float(self.multiplier_tol)})
         if self.monitor is not None and self.monitor_info is not None:
             info = self.monitor_info

@@ -31,7 +31,7 @@ from ._newton import LinearSolveError
 from ._results import SpecialPoint
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
-from ._resolution import resolution
+from ._resolution import multiplier_estimates
 
 __all__ = ["CycleStart", "continue_cycles", "analyse", "correct_cycle", "check_cycle_inputs", "check_cycle_size", "bind_solver", "start_from_samples", "start_from_function",
            "start_from_hopf", "start_from_branch", "start_from_pd"]
@@ -286,14 +286,18 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
 def analyse(problem: CycleProblem, lin: Linearisation, floquet: FloquetMethod | None = None,
             memo: dict | None = None) -> dict[str, Any]:
     """Floquet multipliers (``spectrum``, decreasing modulus), stability (``stable``: the non-trivial multipliers
-    inside the unit circle) and ``trivial_error`` (distance of the multiplier closest to +1 from +1) of a converged
-    orbit, from its linearisation ``lin``.  ``floquet``: the method (default: the linearisation's own, all
+    inside the unit circle), ``trivial_error`` (distance of the multiplier closest to +1 from +1) and ``modes``
+    (the leading multipliers with their eigenvectors (n, k) where the method computed them, else None; for
+    :func:`~._resolution.mode_error`) of a converged orbit, from its linearisation ``lin``.  ``floquet``: the method (default: the linearisation's own, all
     multipliers when dense, the leading ones by a block Krylov method when sparse); ``memo``: a dict kept along a
     branch (warm starts)."""
     floquet = floquet or lin.default_floquet()
-    mu = np.asarray(floquet.multipliers(lin, {} if memo is None else memo))
+    memo = {} if memo is None else memo
+    memo.pop("modes", None)
+    mu = np.asarray(floquet.multipliers(lin, memo))
     nt = nontrivial(mu, problem.n_trivial)
-    return {"spectrum": mu, "stable": bool(np.all(np.abs(nt) < 1.0)), "trivial_error": trivial_error(mu)}
+    return {"spectrum": mu, "stable": bool(np.all(np.abs(nt) < 1.0)), "trivial_error": trivial_error(mu),
+            "modes": memo.pop("modes", None)}  # (multipliers, Ritz vectors) where the method made them
 
 
 @partial(jax.jit, static_argnums=(1,))
@@ -403,9 +407,8 @@ class CycleCurve(Curve):
     def record(self, X, an, iterations, ds, tangent_lam) -> PointRecord:
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
         # only for recorded points: the localisation's many evaluations need no resolution estimate
-        nt = np.abs(nontrivial(an["spectrum"], self.problem.n_trivial))
-        stiff, mu_error = resolution(self.problem.f, X, self.problem.args, self.scheme,
-                                     float(np.max(nt, initial=0.0)))
+        stiff, mu_error = multiplier_estimates(self.problem.f, self.problem.args, X, self.scheme, an["linearisation"],
+                                               an["spectrum"], an.get("modes"), self.problem.n_trivial)
         state = _orbit_state(X) if self.settings.save_states else None
         mesh_error = error_estimate(X, self.scheme, self.problem.f, self.problem.args, an["linearisation"])
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],

@@ -323,15 +323,16 @@ class BlockKrylov(_Leading):
             return mu[np.argsort(-np.abs(mu), kind="stable")]
         out = krylov_leading(lin.monodromy_matmat, n, k=min(self.k, n - 2), inside=self.inside, tol=self.tol,
                              tol_inside=self.tol_inside, block=self.block, max_dim=min(self.max_dim, n),
-                             start=memo.get("krylov_start"))
+                             start=memo.get("krylov_start"), vectors=True)
         if out is None:  # not converged within max_dim: the restarted method (ARPACK) takes over
             memo["krylov_start"] = None
             return Arnoldi(self.k, self.tol, self.inside).multipliers(lin, memo)
-        mu, basis = out
+        mu, basis, X = out
         if 2 * len(mu) > n:  # most of the spectrum is wanted: all of it, from the explicit product
             mu = multipliers_product(lin.transfer_matrices())
             return mu[np.argsort(-np.abs(mu), kind="stable")]
-        memo["krylov_start"] = basis
+        # the leading Ritz pairs of this point, for the estimate of their error (_resolution.mode_error)
+        memo["krylov_start"], memo["modes"] = basis, (mu, X)
         return mu
 
 
@@ -349,10 +350,11 @@ _MODULUS_FLOOR = 1e-3
 
 def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_inside: float, block: int,
                    max_dim: int,
-                   start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+                   start: np.ndarray | None = None, vectors: bool = False) -> tuple[np.ndarray, ...] | None:
     """Leading eigenvalues of the operator ``matmat`` ((n, b) -> (n, b)) by block Krylov Rayleigh-Ritz (see
     :class:`BlockKrylov`).  Returns (eigenvalues sorted by decreasing modulus, an orthonormal real basis (n, c) of
-    their Ritz vectors for the next start), or None when ``max_dim`` columns did not converge them.
+    their Ritz vectors for the next start), with ``vectors`` also the Ritz vectors themselves (n, count), or None
+    when ``max_dim`` columns did not converge them.
 
     The count returned is k, doubled while the smallest has modulus >= ``inside``, and made closed under
     conjugation (a pair is never cut from its conjugate).
@@ -380,8 +382,8 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
         count = _wanted(theta, k, inside)
         dim = Qa.shape[1]
         if dim >= n and count <= dim:  # the whole space: the Ritz values are the eigenvalues
-            Yc = Y[:, :count]
-            return theta[:count], _ritz_basis(Qa @ Yc)
+            X = Qa @ Y[:, :count]
+            return (theta[:count], _ritz_basis(X)) + ((X,) if vectors else ())
         checked = count + guard
         if dim >= min_dim and checked <= dim:
             Yc = Y[:, :checked]
@@ -391,7 +393,8 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
             need = np.where(mod >= inside, tol, tol_inside) * scale
             need[count:] = _GUARD_TOL * scale[count:]
             if np.all(res <= need):
-                return theta[:count], _ritz_basis(Qa @ Yc[:, :count])
+                X = Qa @ Yc[:, :count]
+                return (theta[:count], _ritz_basis(X)) + ((X,) if vectors else ())
         if dim >= max_dim:
             return None
         nxt = _orthonormal(Ws[-1][:, :max_dim - dim], Qa, drop=True)

@@ -78,6 +78,11 @@ class Linearisation(abc.ABC):
     def monodromy_rmatvec(self, y: np.ndarray) -> np.ndarray:
         """M^T y."""
 
+    def host_solve(self, rc: Any, rper: Any, rs: Any) -> col.Orbit:
+        """J^{-1} (rc, rper, rs) like :meth:`solve`, by the interval factorisations on the host where the
+        linearisation has them (no compilation for a new shape: the a-posteriori estimates' solves)."""
+        return self.solve(rc, rper, rs)
+
     def monodromy_matmat(self, V: np.ndarray) -> np.ndarray:
         """M V for a block V (n, b); column by column unless a linearisation can do better."""
         V = np.asarray(V, float)
@@ -86,7 +91,8 @@ class Linearisation(abc.ABC):
     @abc.abstractmethod
     def sweep(self, dx0: np.ndarray, dp: np.ndarray, c: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The linearised orbit (mesh values (N+1, n), interior values (N, m-1, n)) from (dx0, dp) with
-        collocation right-hand sides c (N, mn) (see :mod:`._sweeps`)."""
+        collocation right-hand sides c (N, mn) (see :mod:`._sweeps`); a block dx0 (n, b) with dp = 0 and c
+        (N, mn, b) gives b orbits, (N+1, n, b) and (N, m-1, n, b)."""
 
     @abc.abstractmethod
     def local_solves(self, c: np.ndarray) -> np.ndarray:
@@ -228,8 +234,11 @@ class _DenseLinearisation(Linearisation):
             coef, cp, _ = _coeffs(self.orbit, self.con, self.bound.scheme)
             lus = [DenseLU(np.concatenate([ai, ar], axis=1)) for ai, ar in zip(AI, AR)]
             self._sw = IntervalSweeps(self.orbit, self.bound.scheme.m, lus, list(AL), Bp, np.asarray(coef),
-                                      np.asarray(cp), SparseSweep())
+                                      np.asarray(cp), SparseSweep(), direct=True)
         return self._sw
+
+    def host_solve(self, rc, rper, rs) -> col.Orbit:
+        return self._sweeps().solve(rc, rper, rs)
 
     def sweep(self, dx0, dp, c=None):
         return self._sweeps().sweep(dx0, dp, c)

@@ -79,8 +79,11 @@ Measured, estimate / dist (scripts quoted in the closing note of session 10):
   on stable cycles; a stiff contact spring with Radau points, m = 2, was 0.2-0.3x at N = 64-128 (true error
   6.7e-3, flagged all the same).
 
-Cost per recorded point: one evaluation of f at N m (m + 2) points, one solve of the Newton system (with the
-sparse solver, a GMRES of about 16 sweeps) and N block solves, all on the factorisation the corrector already has.
+Cost per recorded point: one evaluation of f at N m (m + 2) points, one solve of the Newton system and N block
+solves, all on interval factorisations: with the sparse solver those the corrector already has, and the solve a
+GMRES of about 16 sweeps; with the dense one, LU factors of the N blocks made on the host and the reduced (n + 2)
+system formed by one block sweep (:meth:`~._linear.Linearisation.host_solve`; the compiled condensation would
+condense the whole system again, and compile again for every new shape).
 
 Limits.  The second and third estimates are evaluated at the nodes; between the nodes only the first looks, so an
 error that peaks between the nodes of a barely resolved stretch is seen at the nearest node (van der Pol above:
@@ -109,7 +112,7 @@ from ._linear import DenseCondensation
 from ._newton import LinearSolveError
 from ._problem import CycleProblem
 
-__all__ = ["interval_errors", "mesh_value_errors", "running_defects", "defect_errors", "propagated_errors",
+__all__ = ["interval_errors", "mesh_value_errors", "running_defects", "running_defects_linear", "defect_errors", "propagated_errors",
            "error_estimate", "equidistributed_mesh", "remesh"]
 
 # density floor, as a fraction of the mean density (keeps every stretch of the period resolved)
@@ -179,14 +182,30 @@ def _running_rule(scheme: col.Scheme) -> tuple[np.ndarray, np.ndarray]:
     return scheme.basis_at(pts), 0.5 * w / m
 
 
+def _defect(U: jax.Array, F: jax.Array, h: jax.Array, T: jax.Array, w: jax.Array) -> jax.Array:
+    """The running defect (N, m+1, n) of node values U (N, m+1, n) against integrand values F (N, m (m+2), n) at
+    the quadrature points of :func:`_running_rule`."""
+    N, m1, n = U.shape
+    integral = T * h[:, None, None] * jnp.cumsum(jnp.einsum("q,jiqn->jin", w, F.reshape(N, m1 - 1, -1, n)), axis=1)
+    D = U[:, 1:] - U[:, :1] - integral
+    return jnp.concatenate([jnp.zeros_like(D[:, :1]), D], axis=1)
+
+
 @functools.partial(jax.jit, static_argnums=(0,))
 def _running(f: Callable, args: Any, U: jax.Array, h: jax.Array, T: jax.Array, lam: jax.Array,
              B: jax.Array, w: jax.Array) -> jax.Array:
-    N, m1, n = U.shape
-    F = col._f_batched(f, jnp.einsum("qi,jin->jqn", B, U), lam, args).reshape(N, m1 - 1, -1, n)
-    integral = T * h[:, None, None] * jnp.cumsum(jnp.einsum("q,jiqn->jin", w, F), axis=1)
-    D = U[:, 1:] - U[:, :1] - integral
-    return jnp.concatenate([jnp.zeros_like(D[:, :1]), D], axis=1)
+    return _defect(U, col._f_batched(f, jnp.einsum("qi,jin->jqn", B, U), lam, args), h, T, w)
+
+
+@functools.partial(jax.jit, static_argnums=(0,))
+def _running_linear(f: Callable, args: Any, U: jax.Array, Y: jax.Array, h: jax.Array, T: jax.Array,
+                    lam: jax.Array, B: jax.Array, w: jax.Array) -> jax.Array:
+    X, Yq = jnp.einsum("qi,jin->jqn", B, U), jnp.einsum("qi,bjin->bjqn", B, Y)
+
+    def at(x, ys):  # f_x(x) y for the b directions ys (b, n): one linearisation per point
+        return jax.vmap(jax.linearize(lambda z: f(z, lam, args), x)[1])(ys)
+    F = jax.vmap(jax.vmap(at, in_axes=(0, 1), out_axes=1), in_axes=(0, 1), out_axes=1)(X, Yq)  # (b, N, Q, n)
+    return jax.vmap(lambda y, g: _defect(y, g, h, T, w))(Y, F)
 
 
 def running_defects(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
@@ -196,6 +215,16 @@ def running_defects(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme
     U = orbit.nodes()
     return np.asarray(_running(f, args, U, jnp.diff(orbit.mesh), orbit.T, orbit.lam, jnp.asarray(B, U.dtype),
                                jnp.asarray(w, U.dtype)), float)
+
+
+def running_defects_linear(f: Callable, args: Any, orbit: col.Orbit, Y: np.ndarray, scheme: col.Scheme
+                           ) -> np.ndarray:
+    """(b, N, m+1, n): the running defects of b solutions Y (b, N, m+1, n) (node values) of the orbit's
+    variational equation y' = T f_x(x(t), lam) y, by the quadrature of :func:`running_defects`."""
+    B, w = _running_rule(scheme)
+    U = orbit.nodes()
+    return np.asarray(_running_linear(f, args, U, jnp.asarray(Y, U.dtype), jnp.diff(orbit.mesh), orbit.T,
+                                      orbit.lam, jnp.asarray(B, U.dtype), jnp.asarray(w, U.dtype)), float)
 
 
 def defect_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
@@ -221,7 +250,7 @@ def propagated_errors(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Sche
     # From one interval to the next only its defect is carried, as a forcing spread evenly over the interval, by
     # the periodic problem (the orbit's own Newton system): unstable directions do not grow from a start point.
     try:
-        e = lin.solve(np.repeat(delta[:, None, :], scheme.m, axis=1), np.zeros(n), np.zeros(2))
+        e = lin.host_solve(np.repeat(delta[:, None, :], scheme.m, axis=1), np.zeros(n), np.zeros(2))
     except LinearSolveError:
         return failed
     # Inside the interval, the rest of the running defect, through the interval's own block: the collocation

@@ -50,23 +50,31 @@ class IntervalSweeps(Linearisation):
     orbit: the linearisation point; m: collocation degree; lus: N factorisations of K_j (mn x mn); AL: N blocks
     A_{L,j} (mn x n, anything with ``@`` and ``.T``); Bp: (N, mn, 2) columns d/dT, d/dlam; coef (2, N, m+1, n) and
     cp (2, 2): the two scalar rows on the nodes and on (T, lam); gmres: settings with ``gmres_rtol``,
-    ``gmres_restart``, ``gmres_maxiter``.
+    ``gmres_restart``, ``gmres_maxiter``; direct: :meth:`solve` factorises the reduced system instead (small n).
     """
 
     def __init__(self, orbit: col.Orbit, m: int, lus: Sequence[Any], AL: Sequence[Any], Bp: np.ndarray,
-                 coef: np.ndarray, cp: np.ndarray, gmres: Any):
+                 coef: np.ndarray, cp: np.ndarray, gmres: Any, direct: bool = False):
         self.orbit, self.m, self.n = orbit, m, orbit.n
         self.lus, self.AL, self.Bp, self.coef, self.cp, self.gmres = list(lus), list(AL), Bp, coef, cp, gmres
+        # direct: the reduced (n + 2) system is formed by one block sweep and factorised, not solved by GMRES (for
+        # small n, where n + 2 sweep columns cost less than a GMRES solve and need no tolerance)
+        self.direct, self._reduced = direct, None
 
     # ---- sweeps
     def sweep(self, dx0: np.ndarray, dp: np.ndarray, c: np.ndarray | None = None):
         """Mesh values (N+1, n) and interior values (N, m-1, n) of the linearised orbit from (dx0, dp), with
-        collocation right-hand sides ``c`` (N, mn) (default 0)."""
+        collocation right-hand sides ``c`` (N, mn) (default 0).  A block dx0 (n, b) with dp = 0 and c (N, mn, b)
+        sweeps b orbits at once (each factor read once for the block): (N+1, n, b) and (N, m-1, n, b)."""
         N, k = len(self.lus), (self.m - 1) * self.n
-        xs = np.empty((N + 1, self.n))
-        ws = np.empty((N, k))
-        xs[0] = x = dx0
+        dx0 = np.asarray(dx0)
+        block = dx0.shape[1:]
         move_p = bool(np.any(dp))  # a homogeneous sweep (M v, Arnoldi) skips the parameter columns
+        if block and move_p:
+            raise ValueError("a block sweep moves no parameter: dp must be 0")
+        xs = np.empty((N + 1, self.n) + block)
+        ws = np.empty((N, k) + block)
+        xs[0] = x = dx0
         for j, lu in enumerate(self.lus):
             rhs = self.AL[j] @ x
             if move_p:
@@ -76,7 +84,7 @@ class IntervalSweeps(Linearisation):
             z = lu.solve(-rhs)
             ws[j] = z[:k]
             xs[j + 1] = x = z[k:]
-        return xs, ws.reshape(N, self.m - 1, self.n)
+        return xs, ws.reshape((N, self.m - 1, self.n) + block)
 
     def local_solves(self, c: np.ndarray) -> np.ndarray:
         k = (self.m - 1) * self.n
@@ -119,7 +127,21 @@ class IntervalSweeps(Linearisation):
 
     def _border(self, xm: np.ndarray, w: np.ndarray, dp: np.ndarray) -> np.ndarray:
         U = np.concatenate([xm[:-1, None], w, xm[1:, None]], axis=1)
-        return np.einsum("ajin,jin->a", self.coef, U) + self.cp @ dp
+        return np.einsum("ajin,jin...->a...", self.coef, U) + self.cp @ dp
+
+    def _reduced_lu(self):
+        """The LU factors of the reduced system's matrix (n + 2, n + 2) (the operator of :meth:`solve`'s GMRES):
+        the x_0 columns from one block sweep of the identity, the (T, lam) columns from one sweep each."""
+        if self._reduced is None:
+            n = self.n
+            xm, w = self.sweep(np.eye(n), np.zeros(2))
+            cols = [np.concatenate([np.eye(n) - xm[-1], self._border(xm, w, np.zeros((2, n)))])]
+            for k in range(2):
+                dp = np.eye(2)[k]
+                xk, wk = self.sweep(np.zeros(n), dp)
+                cols.append(np.concatenate([-xk[-1], self._border(xk, wk, dp)])[:, None])
+            self._reduced = sla.lu_factor(np.concatenate(cols, axis=1), check_finite=False)
+        return self._reduced
 
     def _gmres(self, matvec, b: np.ndarray, rtol: float | None = None) -> np.ndarray:
         s = self.gmres
@@ -146,7 +168,12 @@ class IntervalSweeps(Linearisation):
             xm, w = self.sweep(v[:n], v[n:])
             return np.concatenate([v[:n] - xm[-1], self._border(xm, w, v[n:])])
 
-        v = self._gmres(matvec, b, rtol)
+        if self.direct:
+            v = sla.lu_solve(self._reduced_lu(), b, check_finite=False)
+            if not np.all(np.isfinite(v)):
+                raise LinearSolveError("the reduced collocation system is singular")
+        else:
+            v = self._gmres(matvec, b, rtol)
         xm, w = self.sweep(v[:n], v[n:], c)
         return col.Orbit(self.orbit.mesh, jnp.asarray(xm), jnp.asarray(w), jnp.asarray(v[n]), jnp.asarray(v[n + 1]))
 

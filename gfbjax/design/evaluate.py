@@ -70,7 +70,8 @@ class CycleEvaluation:
     energy: works per cycle [p0 R L c]; multipliers: Floquet multipliers (decreasing modulus; all of them with the
     dense solver, the leading ones (block Krylov) with the sparse one); max_mu: largest non-trivial modulus;
     grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None.
-    stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.resolution``): with
+    stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.multiplier_estimates``):
+    with
     ``multiplier_error`` above 1e-3 max_mu and its gradient are not those of the cycle (at low speed on N = 16
     they are those of the film's fast modes, which collocation puts near the unit circle): raise N.  NaN: not
     estimated."""
@@ -216,10 +217,11 @@ class FoilDesign:
                                     f"Newton {sol.outcome} after {int(sol.iterations)} iterations")
         orbit = sol.x
         self.orbit = orbit
-        mu = cont.analyse(problem, lin, self.settings.floquet, self._memo)["spectrum"]
+        an = cont.analyse(problem, lin, self.settings.floquet, self._memo)
+        mu = an["spectrum"]
         nt = cont.nontrivial(mu, problem.n_trivial)
-        stiff, mu_error = cont.resolution(problem.f, orbit, problem.args, self.scheme,
-                                          float(np.max(np.abs(nt), initial=0.0)))
+        stiff, mu_error = cont.multiplier_estimates(problem.f, problem.args, orbit, self.scheme, lin, mu, an["modes"],
+                                                    problem.n_trivial)
         ev = CycleEvaluation(float(alpha_f), float(eta), self.omega, orbit,
                              CycleEnergy(*(float(w) for w in orbit_energy(orbit, p, self.scheme.kind))), mu,
                              float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(sol.iterations),

@@ -191,7 +191,7 @@ def _one_speed(args, spec, params, x0, options, out, meta, t0) -> int:
         f"({'stable' if ev.stable else 'unstable'})",
         f"  cost              {opt.n_solves} cycle solves, {opt.n_gradients} gradients, {opt.seconds:.1f} s "
         f"(stopped: {opt.reason})",
-        f"  accuracy          multiplier error {ev.multiplier_error:.1e} (frozen-coefficient estimate)"
+        f"  accuracy          multiplier error {ev.multiplier_error:.1e} (frozen-coefficient model and mode defects)"
         + ("" if ev.resolved else f"; FLAGGED: max|mu| is not resolved at N = {args.N} (at low speed the film's "
            "fast modes or the rotor mode): raise --N"),
     ]), flush=True)
