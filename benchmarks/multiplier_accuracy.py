@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 
 import gfbjax
-import numpy as np
 
 from gfbjax import cont
 from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem
