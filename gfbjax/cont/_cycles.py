@@ -459,8 +459,8 @@ class CycleCurve(Curve):
 
     def border_solve(self, X, lin):
         rng = np.random.default_rng(1)  # the same b at every point of a branch (same shapes)
-        try:
-            w = lin.solve(rng.standard_normal((X.N, self.scheme.m, X.n)), rng.standard_normal(X.n),
+        try:  # on the host: a dense linearisation would compile its condensation once more for this one solve
+            w = lin.host_solve(rng.standard_normal((X.N, self.scheme.m, X.n)), rng.standard_normal(X.n),
                           rng.standard_normal(2))
         except LinearSolveError:
             return None

@@ -16,8 +16,9 @@ its mesh estimate cannot see how well they are resolved.  Two ways it goes wrong
   with Radau points; it is 0.247 (N = 64 and 128 with both, and exp(lam T) of the equilibrium's rotor mode).
 
 Both are estimated by :func:`resolution` from the frozen-coefficient model: the eigenvalues lam of f_x at
-:data:`NODES` mesh points spread over the period (the largest estimate of them is kept, so that the result does
-not depend on where the orbit's time origin lies), each mode's multiplier prod_i R(h_i lam) on the mesh against
+:data:`NODES` mesh points spread over the period (the largest estimate of them is kept, so that it does not hang
+on one point of the orbit; it still depends on the time origin where f_x changes much between those points, see
+"Limits" below), each mode's multiplier prod_i R(h_i lam) on the mesh against
 exp(lam T) exactly:
 
 * ``stiff_modulus``: the largest modulus the mesh gives a fast mode (exact multiplier below :data:`FAST`; its
@@ -55,17 +56,28 @@ Floquet mode as the orbit's error estimate (:mod:`._mesh`) treats the orbit:
   max(1, |mu|).
 
 The correction is first order in the defects, so it holds where each interval's transfer matrix is nearly right.
-Measured (estimate / true error): the grazing contact, Gauss and Radau, m = 2 and 4, N = 256-4096: 0.63-1.24
-wherever the orbit's mesh error is below 1e-2; at N = 64 (mesh errors 1e-2 to 4e-2, flagged for those) 0.001-0.16.
+Measured (estimate / true error): the grazing contact, Gauss and Radau, m = 2 and 4, N = 256-4096: 0.5-2.2 in
+16 of 17 cases where the orbit's mesh error is below 1e-2, and 0.16 in one (Radau m = 4, N = 2048: 0.014 for
+0.086); at N = 64 (mesh errors 1e-2 to 4e-2, flagged for those) 0.001-0.16.
 Van der Pol, mu = 0.5 (multiplier 0.039), N = 6-12, Gauss and Radau: 0.4-7.4 (true errors 2e-8 to 2e-4; on
 errors below 1e-7, at N = 16 and 32, 0.13-6.4).  The GFB reference grid (48x8), N = 16 / 24 / 32 against N = 128, at the
 NS speed: 1.2 / 4.7 / 2.2 (true 4.1e-4 / 3.2e-5 / 3.6e-5), at Omega_bar 0.55: 1.3 / 1.9 / 1.6 (true 3.8e-4 /
 1.3e-4 / 2.2e-4; the kinks make the error fall erratically with N).  It does not see a mode oscillating within an
 interval (h |lam| ~ 1) on a constant Jacobian: there the defect's integral over each interval vanishes by the
 collocation conditions (Gauss and Radau quadrature are exact for it), and the error lies in how the interval's
-own step propagates, which the frozen model computes exactly.  Each estimate covers what the other misses, so a
-recorded point carries the larger (:func:`multiplier_estimates`).  Cost on the reference branch: one block sweep
-of a few columns and the linearised field at N m (m + 2) points per recorded point, about 0.08 s.
+own step propagates, which the frozen model computes exactly.  Each estimate covers cases the other misses (not
+all of them: Limits below), so a recorded point carries the larger (:func:`multiplier_estimates`).
+
+Limits (the review of session 11).  A mode that is stiff on only part of the period (it oscillates within an
+interval there, on a smooth field) is seen by neither: the frozen model only where one of its :data:`NODES`
+points falls on that part, the mode defects not at all.  The review case (tests/cont/test_cont_resolution.py,
+marked as a known failure) computes a pair of modulus 0.83 (stable) for the exact 1.02 (unstable), estimate
+1.2e-4, unflagged; a quarter period later in time the same cycle is flagged.  A kink that the orbit crosses
+between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the period, N = 64) is missed by the
+collocation and the estimate alike, depending on the time origin.  Where :func:`mode_error` is NaN (the modes do
+not match the spectrum) the frozen model's estimate stands alone, unflagged for that reason.  Cost per recorded point: two block sweeps of
+a few columns and the linearised field at N m (m + 2) points per column; on the reference branch 0.05-0.26 s,
+5.4 s over the branch (benchmarks/README.md, cycle_branch.py and multiplier_accuracy.py).
 """
 from __future__ import annotations
 
@@ -133,7 +145,7 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     lin: the orbit's :class:`~._linear.Linearisation`; spectrum: its multipliers (decreasing modulus); modes:
     (multipliers (k,), eigenvectors (n, k)) of the collocation monodromy that hold the deciding ones and the
     trivial one (the block Krylov method's Ritz pairs); default: from the explicit product of the transfer
-    matrices."""
+    matrices (NaN above :data:`MAX_DENSE` states)."""
     from ._floquet import _ritz_basis, nontrivial
     from ._mesh import running_defects_linear
 
@@ -147,6 +159,8 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     if not np.any(np.abs(nt) >= floor):
         return 0.0
     if modes is None:
+        if orbit.n > MAX_DENSE:
+            return math.nan  # no Ritz pairs, and the explicit monodromy would cost too much: not estimated
         M = np.eye(orbit.n)
         for G in lin.transfer_matrices():
             M = G @ M
@@ -162,8 +176,11 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     xs, ws = lin.sweep(Q, np.zeros(2))
     H = Q.T @ xs[-1]
     Y = np.moveaxis(np.concatenate([xs[:-1, None], ws, xs[1:, None]], axis=1), -1, 0)  # (c, N, m+1, n)
-    # padded with zero columns to a multiple of 4: one compilation serves subspaces of nearby sizes
-    D = running_defects_linear(f, args, orbit, np.concatenate([Y, np.zeros((-c % 4,) + Y.shape[1:])]), scheme)[:c]
+    # in blocks of 4 columns (the last padded with zeros): one compilation serves every size of the subspace (the
+    # spurious band at low speed makes it 10-20 columns on the reference branch)
+    Y = np.concatenate([Y, np.zeros((-c % 4,) + Y.shape[1:])])
+    D = np.concatenate([running_defects_linear(f, args, orbit, Y[i:i + 4], scheme)
+                        for i in range(0, len(Y), 4)])[:c]
     if not np.all(np.isfinite(D)):
         return math.nan
     # Each interval's defect, spread evenly over it and carried from zero through the period, gives y(T) - Y(T)
@@ -179,7 +196,7 @@ def multiplier_estimates(f: Callable, args: Any, orbit: col.Orbit, scheme: col.S
                          n_trivial: int = 1) -> tuple[float, float]:
     """(stiff_modulus, multiplier_error) that a recorded cycle carries: the frozen-coefficient model's
     (:func:`resolution`) and, for the error, the larger of its estimate and the mode defects' (:func:`mode_error`;
-    each sees what the other misses, module docstring).  NaN only where neither is estimated."""
+    each sees cases the other misses, module docstring, with its limits).  NaN only where neither is estimated."""
     from ._floquet import nontrivial
 
     nt = np.abs(nontrivial(np.asarray(spectrum), n_trivial))
