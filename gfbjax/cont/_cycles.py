@@ -288,9 +288,9 @@ def analyse(problem: CycleProblem, lin: Linearisation, floquet: FloquetMethod | 
     """Floquet multipliers (``spectrum``, decreasing modulus), stability (``stable``: the non-trivial multipliers
     inside the unit circle), ``trivial_error`` (distance of the multiplier closest to +1 from +1) and ``modes``
     (the leading multipliers with their eigenvectors (n, k) where the method computed them, else None; for
-    :func:`~._resolution.mode_error`) of a converged orbit, from its linearisation ``lin``.  ``floquet``: the method (default: the linearisation's own, all
-    multipliers when dense, the leading ones by a block Krylov method when sparse); ``memo``: a dict kept along a
-    branch (warm starts)."""
+    :func:`~._resolution.mode_error`) of a converged orbit, from its linearisation ``lin``.  ``floquet``: the
+    method (default: the linearisation's own, all multipliers when dense, the leading ones by a block Krylov
+    method when sparse); ``memo``: a dict kept along a branch (warm starts)."""
     floquet = floquet or lin.default_floquet()
     memo = {} if memo is None else memo
     memo.pop("modes", None)

@@ -112,8 +112,8 @@ from ._linear import DenseCondensation
 from ._newton import LinearSolveError
 from ._problem import CycleProblem
 
-__all__ = ["interval_errors", "mesh_value_errors", "running_defects", "running_defects_linear", "defect_errors", "propagated_errors",
-           "error_estimate", "equidistributed_mesh", "remesh"]
+__all__ = ["interval_errors", "mesh_value_errors", "running_defects", "running_defects_linear", "defect_errors",
+           "propagated_errors", "error_estimate", "equidistributed_mesh", "remesh"]
 
 # density floor, as a fraction of the mean density (keeps every stretch of the period resolved)
 _FLOOR = 0.1

@@ -66,7 +66,10 @@ NS speed: 1.2 / 4.7 / 2.2 (true 4.1e-4 / 3.2e-5 / 3.6e-5), at Omega_bar 0.55: 1.
 interval (h |lam| ~ 1) on a constant Jacobian: there the defect's integral over each interval vanishes by the
 collocation conditions (Gauss and Radau quadrature are exact for it), and the error lies in how the interval's
 own step propagates, which the frozen model computes exactly.  Each estimate covers cases the other misses (not
-all of them: Limits below), so a recorded point carries the larger (:func:`multiplier_estimates`).
+all of them: Limits below), so a recorded point carries the larger (:func:`multiplier_estimates`).  Cost per
+recorded point: two block sweeps of a few columns and the linearised field at N m (m + 2) points per column; on
+the reference branch 0.05-0.26 s, 5.4 s over the branch (benchmarks/README.md, cycle_branch.py and
+multiplier_accuracy.py).
 
 Limits (the review of session 11).  A mode that is stiff on only part of the period (it oscillates within an
 interval there, on a smooth field) is seen by neither: the frozen model only where one of its :data:`NODES`
@@ -75,9 +78,7 @@ marked as a known failure) computes a pair of modulus 0.83 (stable) for the exac
 1.2e-4, unflagged; a quarter period later in time the same cycle is flagged.  A kink that the orbit crosses
 between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the period, N = 64) is missed by the
 collocation and the estimate alike, depending on the time origin.  Where :func:`mode_error` is NaN (the modes do
-not match the spectrum) the frozen model's estimate stands alone, unflagged for that reason.  Cost per recorded point: two block sweeps of
-a few columns and the linearised field at N m (m + 2) points per column; on the reference branch 0.05-0.26 s,
-5.4 s over the branch (benchmarks/README.md, cycle_branch.py and multiplier_accuracy.py).
+not match the spectrum) the frozen model's estimate stands alone, unflagged for that reason.
 """
 from __future__ import annotations
 

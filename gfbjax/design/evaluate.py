@@ -70,11 +70,10 @@ class CycleEvaluation:
     energy: works per cycle [p0 R L c]; multipliers: Floquet multipliers (decreasing modulus; all of them with the
     dense solver, the leading ones (block Krylov) with the sparse one); max_mu: largest non-trivial modulus;
     grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None.
-    stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.multiplier_estimates``):
-    with
-    ``multiplier_error`` above 1e-3 max_mu and its gradient are not those of the cycle (at low speed on N = 16
-    they are those of the film's fast modes, which collocation puts near the unit circle): raise N.  NaN: not
-    estimated."""
+    stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.multiplier_estimates``:
+    the frozen-coefficient model and the Floquet modes' defects): with ``multiplier_error`` above 1e-3 max_mu and
+    its gradient are not those of the cycle (at low speed on N = 16 they are those of the film's fast modes, which
+    collocation puts near the unit circle): raise N.  NaN: not estimated."""
 
     alpha_f: float
     eta: float
