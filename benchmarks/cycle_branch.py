@@ -117,7 +117,7 @@ def main() -> None:
             ("max |mu_trivial - 1|", f"{rec['max_trivial_error']:.2e}"),
             ("collocation points", rec["collocation"]),
             ("spurious multipliers up to |mu| (stiff_modulus)", f"{rec['max_stiff_modulus']:.3f}"),
-            ("max multiplier error (frozen model, mode defects)", f"{rec['max_multiplier_error']:.1e}"),
+            ("max multiplier error (frozen, mode defects, halved)", f"{rec['max_multiplier_error']:.1e}"),
             ("max mesh error of the orbits (relative)", f"{rec['max_mesh_error']:.1e}"),
             ("flagged points", rec["flagged_points"])]
     rows += [(f"{s['type']} at", f"Omega_bar {s['Omega_bar']:.5f}"

@@ -7,8 +7,9 @@ variational equation is one order less smooth than the orbit and the multipliers
 corrected at fixed Omega_bar on uniform meshes of N = 16, 24, 32 and 128 intervals (m = 4, the default
 collocation points, sparse solver), and the leading non-trivial multiplier of each is compared with the one on
 N = 128.  Printed per (speed, N): that difference (the "true" error, itself carrying the N = 128 cycle's error,
-which its own estimate states) and the two estimates a recorded point carries: the mode defects'
-(``cont.mode_error``) and the frozen-coefficient model's (``cont.resolution``).
+which its own estimate states) and the three estimates a recorded point carries: the mode defects'
+(``cont.mode_error``), the change on halved intervals (``cont.halved_error``) and the frozen-coefficient model's
+(``cont.resolution``).
 
 Usage:  python benchmarks/multiplier_accuracy.py [--nx 48 --nz 8] [--speeds 0.3768 0.55]
 Writes benchmarks/results/multiplier_accuracy.json and prints a table.  About 4 min per speed on 2 cores.
@@ -58,21 +59,25 @@ def main() -> None:
             mu = an["spectrum"]
             lead = cont.nontrivial(mu, problem.n_trivial)[0]
             modes = cont.mode_error(problem.f, problem.args, sol.x, scheme, lin, mu, an["modes"], problem.n_trivial)
+            halved = cont.halved_error(sol.x, scheme, lin, mu, cont.bind_solver(problem, scheme, s).linearise,
+                                       an["modes"], problem.n_trivial)
             frozen = cont.resolution(problem.f, sol.x, problem.args, scheme, abs(lead))[1]
-            got[N] = (lead, modes, frozen)
+            got[N] = (lead, modes, halved, frozen)
         ref = got[a.reference_N][0]
-        for N, (lead, modes, frozen) in sorted(got.items()):
+        for N, (lead, modes, halved, frozen) in sorted(got.items()):
             true = abs(lead - ref) / max(1.0, abs(ref)) if N != a.reference_N else float("nan")
             rows.append({"Omega_bar": lam, "N": N, "leading_mu": [lead.real, lead.imag], "true_error": true,
-                         "mode_error": modes, "frozen_error": frozen})
+                         "mode_error": modes, "halved_error": halved, "frozen_error": frozen})
     wall = time.perf_counter() - t0
 
     print(f"{'Omega_bar':>9} {'N':>4} {'|mu_lead|':>10} {'true error':>11} {'mode est':>9} {'ratio':>6} "
-          f"{'frozen est':>10}")
+          f"{'halved est':>10} {'ratio':>6} {'frozen est':>10}")
     for r in rows:
-        ratio = r["mode_error"] / r["true_error"] if r["true_error"] > 0 else float("nan")
+        def ratio(k):
+            return r[k] / r["true_error"] if r["true_error"] > 0 else float("nan")
         print(f"{r['Omega_bar']:>9.4f} {r['N']:>4d} {abs(complex(*r['leading_mu'])):>10.6f} {r['true_error']:>11.2e} "
-              f"{r['mode_error']:>9.2e} {ratio:>6.2f} {r['frozen_error']:>10.2e}")
+              f"{r['mode_error']:>9.2e} {ratio('mode_error'):>6.2f} {r['halved_error']:>10.2e} "
+              f"{ratio('halved_error'):>6.2f} {r['frozen_error']:>10.2e}")
     rec = {"grid": f"{a.nx}x{a.nz}", "n": problem.n, "reference_N": a.reference_N, "rows": rows,
            "wall_s": round(wall, 1),
            "note": "true_error: |mu_N - mu_ref| / max(1, |mu_ref|) of the leading non-trivial multiplier at fixed "

@@ -49,7 +49,7 @@ from ._linear import (DenseCondensation as DenseCondensation, Linearisation as L
 from ._newton import (LinearSolveError as LinearSolveError, NewtonSettings as NewtonSettings,
                       NewtonSolution as NewtonSolution, solve as newton_solve, solve_host as newton_solve_host)
 from ._problem import CycleProblem as CycleProblem, EquilibriumProblem as EquilibriumProblem, Monitor as Monitor
-from ._resolution import (mode_error as mode_error, multiplier_estimates as multiplier_estimates,
+from ._resolution import (halved_error as halved_error, mode_error as mode_error, multiplier_estimates as multiplier_estimates,
                           resolution as resolution)
 from ._results import Outcome as Outcome, SPECIAL_TYPES as SPECIAL_TYPES, SpecialPoint as SpecialPoint
 from ._settings import (CycleSettings as CycleSettings, EquilibriumSettings as EquilibriumSettings,
@@ -58,7 +58,7 @@ from ._sparsity import (Coloring as Coloring, color_pattern as color_pattern, de
                         jacobian_values as jacobian_values)
 
 __all__ = [
-    "resolution", "mode_error", "multiplier_estimates", "Arnoldi", "BatchNewtonResult", "BlockKrylov", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
+    "resolution", "mode_error", "halved_error", "multiplier_estimates", "Arnoldi", "BatchNewtonResult", "BlockKrylov", "check_cycle_inputs", "check_cycle_size", "Branch", "BranchFileError", "Checkpoint", "CheckpointError", "Monitor", "Coloring", "Constraint", "CycleProblem",
     "CycleSettings", "CycleStart",
     "DenseCondensation", "EquilibriumProblem", "EquilibriumSettings", "FloquetMethod", "HopfPoint",
     "LinearSolveError", "LinearSolver", "Linearisation", "Natural", "NewtonSettings", "NewtonSolution", "Orbit",

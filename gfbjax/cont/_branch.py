@@ -349,7 +349,7 @@ class Branch:
         if self.multiplier_error is not None:
             data["multiplier_error"] = (("point",), np.asarray(self.multiplier_error, float),
                                         {"long_name": "estimated error of the deciding Floquet multipliers on this "
-                                                      "mesh (frozen-coefficient model and mode defects)",
+                                                      "mesh (frozen model, mode defects, halved intervals)",
                                          "multiplier_tol": float(self.multiplier_tol)})
         if self.monitor is not None and self.monitor_info is not None:
             info = self.monitor_info

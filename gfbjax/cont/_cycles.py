@@ -25,7 +25,7 @@ from ._driver import Curve, continue_curve
 from ._events import (classify, crossed_multipliers, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
                       multiplier_crossings, name_crossings)
 from ._floquet import FloquetMethod, nontrivial, trivial_error
-from ._mesh import equidistributed_mesh, error_estimate, interval_errors, remesh
+from ._mesh import equidistributed_mesh, error_estimate, halved_mesh, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._newton import LinearSolveError
 from ._results import SpecialPoint
@@ -408,7 +408,8 @@ class CycleCurve(Curve):
         l2, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
         # only for recorded points: the localisation's many evaluations need no resolution estimate
         stiff, mu_error = multiplier_estimates(self.problem.f, self.problem.args, X, self.scheme, an["linearisation"],
-                                               an["spectrum"], an.get("modes"), self.problem.n_trivial)
+                                               an["spectrum"], an.get("modes"), self.problem.n_trivial,
+                                               self.solver.linearise)
         state = _orbit_state(X) if self.settings.save_states else None
         mesh_error = error_estimate(X, self.scheme, self.problem.f, self.problem.args, an["linearisation"])
         return PointRecord(float(X.lam), float(X.T), float(l2), np.asarray(xmax), np.asarray(xmin), an["spectrum"],
@@ -478,7 +479,7 @@ class CycleCurve(Curve):
         #   from its N = 64 value (the leading pair's |mu| varies by 1e-4 along the discrete phase family).
         mesh = np.asarray(X.mesh, float)
         mid = 0.5 * (mesh[:-1] + mesh[1:])
-        fine = np.sort(np.concatenate([mesh, mid]))
+        fine = halved_mesh(mesh)
         staggered = np.append(mid - mid[0], 1.0)
         return [(remesh(X, self.scheme, fine), remesh(tau, self.scheme, fine)),
                 (remesh(X, self.scheme, staggered, mid[0]), remesh(tau, self.scheme, staggered, mid[0]))]

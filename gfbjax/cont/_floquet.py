@@ -40,13 +40,18 @@ import numpy as np
 from ._checks import check_range, store
 
 
-def multipliers_product(G: np.ndarray) -> np.ndarray:
-    """Eigenvalues of the explicitly formed product G[N-1] @ ... @ G[0]."""
+def monodromy_product(G: np.ndarray) -> np.ndarray:
+    """The explicitly formed product G[N-1] @ ... @ G[0] (n, n) of transfer matrices G (N, n, n)."""
     G = np.asarray(G)
     M = np.eye(G.shape[-1])
     for g in G:
         M = g @ M
-    return np.linalg.eigvals(M)
+    return M
+
+
+def multipliers_product(G: np.ndarray) -> np.ndarray:
+    """Eigenvalues of :func:`monodromy_product` (G)."""
+    return np.linalg.eigvals(monodromy_product(G))
 
 
 @jax.jit

@@ -113,7 +113,8 @@ from ._newton import LinearSolveError
 from ._problem import CycleProblem
 
 __all__ = ["interval_errors", "mesh_value_errors", "running_defects", "running_defects_linear", "defect_errors",
-           "propagated_errors", "error_estimate", "equidistributed_mesh", "remesh"]
+           "propagated_errors", "error_estimate", "equidistributed_mesh", "halved_mesh",
+           "remesh"]
 
 # density floor, as a fraction of the mean density (keeps every stretch of the period resolved)
 _FLOOR = 0.1
@@ -294,6 +295,12 @@ def equidistributed_mesh(orbit: col.Orbit, scheme: col.Scheme) -> np.ndarray:
     mesh = np.interp(levels, cum, np.asarray(orbit.mesh, float))
     mesh[0], mesh[-1] = 0.0, 1.0
     return mesh
+
+
+def halved_mesh(mesh: Any) -> np.ndarray:
+    """(2N+1,): every interval of ``mesh`` (N+1,) split at its midpoint."""
+    mesh = np.asarray(mesh, float)
+    return np.sort(np.concatenate([mesh, 0.5 * (mesh[:-1] + mesh[1:])]))
 
 
 def remesh(orbit: col.Orbit, scheme: col.Scheme, mesh: np.ndarray, shift: float = 0.0) -> col.Orbit:

@@ -56,29 +56,43 @@ Floquet mode as the orbit's error estimate (:mod:`._mesh`) treats the orbit:
   max(1, |mu|).
 
 The correction is first order in the defects, so it holds where each interval's transfer matrix is nearly right.
-Measured (estimate / true error): the grazing contact, Gauss and Radau, m = 2 and 4, N = 256-4096: 0.5-2.2 in
-16 of 17 cases where the orbit's mesh error is below 1e-2, and 0.16 in one (Radau m = 4, N = 2048: 0.014 for
-0.086); at N = 64 (mesh errors 1e-2 to 4e-2, flagged for those) 0.001-0.16.
-Van der Pol, mu = 0.5 (multiplier 0.039), N = 6-12, Gauss and Radau: 0.4-7.4 (true errors 2e-8 to 2e-4; on
-errors below 1e-7, at N = 16 and 32, 0.13-6.4).  The GFB reference grid (48x8), N = 16 / 24 / 32 against N = 128, at the
-NS speed: 1.2 / 4.7 / 2.2 (true 4.1e-4 / 3.2e-5 / 3.6e-5), at Omega_bar 0.55: 1.3 / 1.9 / 1.6 (true 3.8e-4 /
-1.3e-4 / 2.2e-4; the kinks make the error fall erratically with N).  It does not see a mode oscillating within an
-interval (h |lam| ~ 1) on a constant Jacobian: there the defect's integral over each interval vanishes by the
-collocation conditions (Gauss and Radau quadrature are exact for it), and the error lies in how the interval's
-own step propagates, which the frozen model computes exactly.  Each estimate covers cases the other misses (not
-all of them: Limits below), so a recorded point carries the larger (:func:`multiplier_estimates`).  Cost per
-recorded point: two block sweeps of a few columns and the linearised field at N m (m + 2) points per column; on
-the reference branch 0.05-0.26 s, 5.4 s over the branch (benchmarks/README.md, cycle_branch.py and
-multiplier_accuracy.py).
+Measured (estimate / true error): the grazing contact, Gauss and Radau, m = 2 and 4, N = 256-4096: 0.5-2.2 in 16 of
+17 cases where the orbit's mesh error is below 1e-2, and 0.16 in one (Radau m = 4, N = 2048: 0.014 for 0.086); at
+N = 64 (mesh errors 1e-2 to 4e-2, flagged for those) 0.001-0.16. Van der Pol, mu = 0.5 (multiplier 0.039), N = 6-12,
+Gauss and Radau: 0.4-7.4 (true errors 2e-8 to 2e-4; on errors below 1e-7, at N = 16 and 32, 0.13-6.4).  The GFB
+reference grid (48x8), N = 16 / 24 / 32 against N = 128, at the NS speed: 1.2 / 4.7 / 2.2 (true 4.1e-4 / 3.2e-5 /
+3.6e-5), at Omega_bar 0.55: 1.3 / 1.9 / 1.6 (true 3.8e-4 / 1.3e-4 / 2.2e-4; the kinks make the error fall
+erratically with N).  It does not see a mode oscillating within an interval (h |lam| ~ 1) on a constant Jacobian:
+there the defect's integral over each interval vanishes by the collocation conditions (Gauss and Radau quadrature
+are exact for it), and the error lies in how the interval's own step propagates, which the frozen model computes
+exactly (and the halved intervals below, Jacobian constant or not).  Each estimate covers cases the others miss, so
+a recorded point carries the largest (:func:`multiplier_estimates`).  Cost per recorded point: two block sweeps of a
+few columns and the linearised field at N m (m + 2) points per column; on the reference branch 0.05-0.26 s, 5.4 s
+over the branch (benchmarks/README.md, cycle_branch.py and multiplier_accuracy.py).
 
-Limits (the review of session 11).  A mode that is stiff on only part of the period (it oscillates within an
-interval there, on a smooth field) is seen by neither: the frozen model only where one of its :data:`NODES`
-points falls on that part, the mode defects not at all.  The review case (tests/cont/test_cont_resolution.py,
-marked as a known failure) computes a pair of modulus 0.83 (stable) for the exact 1.02 (unstable), estimate
-1.2e-4, unflagged; a quarter period later in time the same cycle is flagged.  A kink that the orbit crosses
-between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the period, N = 64) is missed by the
-collocation and the estimate alike, depending on the time origin.  Where :func:`mode_error` is NaN (the modes do
-not match the spectrum) the frozen model's estimate stands alone, unflagged for that reason.
+**Halved intervals** (:func:`halved_error`).  Neither estimate above sees a mode that is stiff on only part of the
+period (it oscillates within an interval there, on a smooth field): the frozen model sees it only where one of its
+:data:`NODES` points falls on that part, and the mode defects not at all.  In the review case
+(tests/cont/test_cont_resolution.py) Radau points, N = 40, computed a pair of modulus 0.83 (stable) for the exact
+1.02 (unstable), both estimates 1.2e-4, unflagged; a quarter period later in time the frozen model flagged the same
+cycle.  The third estimate asks the discretisation itself: the orbit's polynomial is sampled on the mesh with every
+interval halved (not corrected there: it is already accurate, which the mesh estimate checks), the branch's solver
+linearises it, and one block sweep of that linearisation carries the basis Q above through the period.  The error of
+each deciding multiplier is its distance from the nearest eigenvalue of Q^T M_2N Q, relative to max(1, |mu|): the
+change on halving, which is (1 - 2^-p) of the error where the error falls as h^p (Gauss and Radau points, p = 2m and
+2m - 1), and a fraction of it where a kink makes it fall erratically (there the mode defects stand in).  Measured on
+the review case (estimate / true error): Radau N = 40 and 80, Gauss N = 20 and 40: 0.70-0.99 (true errors 2.9e-3 to
+0.25, mostly in the angle: the mode turns about 40 rad on its stiff stretch).  On the GFB reference grid it agrees
+with the mode defects (0.38-4.6x the true error against N = 128, benchmarks/multiplier_accuracy.py).  Cost per
+recorded point: one linearisation on 2N intervals (a compilation for 2N once per branch) and one block sweep of a
+few columns; on the reference branch 0.25 s, 16 s over the branch (benchmarks/README.md, cycle_branch.py).  Like the
+mode defects, it projects on the span of the modes at N, so it is first order in the change and an estimate, not a
+bound, where the modes themselves move.
+
+Limits.  A kink that the orbit crosses between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the
+period, N = 64) is missed by the collocation and the estimates alike, depending on the time origin.  Where
+:func:`mode_error` or :func:`halved_error` is NaN (the modes do not match the spectrum) the others stand,
+unflagged for that reason.
 """
 from __future__ import annotations
 
@@ -91,8 +105,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _collocation as col
+from ._floquet import _ritz_basis, monodromy_product, nontrivial
+from ._mesh import halved_mesh, remesh, running_defects_linear
+from ._newton import LinearSolveError
 
-__all__ = ["resolution", "mode_error", "multiplier_estimates", "DECIDING", "FAST", "NODES", "MAX_DENSE"]
+__all__ = ["resolution", "mode_error", "halved_error", "multiplier_estimates", "DECIDING", "FAST", "NODES",
+           "MAX_DENSE"]
 
 #: a mode whose exact multiplier is below this modulus is a fast mode (:func:`resolution`'s ``stiff_modulus``)
 FAST = 1e-3
@@ -135,21 +153,11 @@ def resolution(f: Callable, orbit: col.Orbit, args: Any, scheme: col.Scheme,
     return stiff, error
 
 
-def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin: Any, spectrum: np.ndarray,
-               modes: tuple[np.ndarray, np.ndarray] | None = None, n_trivial: int = 1) -> float:
-    """The largest estimated error of the deciding multipliers (the non-trivial ones of modulus at least
-    :data:`DECIDING` times min(1, the leading non-trivial modulus), and at least :data:`FAST`), relative to
-    max(1, |mu|), from the running defects of their Floquet modes (module docstring, "Propagated mode defects").
-    Dimensionless; 0 where no multiplier is deciding, NaN where the defects are not finite or ``modes`` lacks a
-    deciding multiplier.
-
-    lin: the orbit's :class:`~._linear.Linearisation`; spectrum: its multipliers (decreasing modulus); modes:
-    (multipliers (k,), eigenvectors (n, k)) of the collocation monodromy that hold the deciding ones and the
-    trivial one (the block Krylov method's Ritz pairs); default: from the explicit product of the transfer
-    matrices (NaN above :data:`MAX_DENSE` states)."""
-    from ._floquet import _ritz_basis, nontrivial
-    from ._mesh import running_defects_linear
-
+def _deciding_modes(orbit: col.Orbit, lin: Any, spectrum: np.ndarray, modes: tuple[np.ndarray, np.ndarray] | None,
+                    n_trivial: int) -> tuple[np.ndarray, np.ndarray] | float:
+    """(want, Q): the deciding multipliers (k,) and a real orthonormal basis Q (n, c) of their Floquet modes with
+    the trivial one; or 0.0 where no multiplier is deciding, NaN where ``modes`` lacks one of them (or, without
+    ``modes``, above :data:`MAX_DENSE` states)."""
     mu = np.asarray(spectrum)
     nt = nontrivial(mu, n_trivial)
     if nt.size == 0:
@@ -162,17 +170,38 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     if modes is None:
         if orbit.n > MAX_DENSE:
             return math.nan  # no Ritz pairs, and the explicit monodromy would cost too much: not estimated
-        M = np.eye(orbit.n)
-        for G in lin.transfer_matrices():
-            M = G @ M
-        modes = np.linalg.eig(M)
+        modes = np.linalg.eig(monodromy_product(lin.transfer_matrices()))
     ev, V = (np.asarray(a) for a in modes)
     want = nt[np.abs(nt) >= floor]
     if np.any(np.min(np.abs(want[:, None] - ev[None, :]), axis=1) > 1e-6 * np.maximum(1.0, np.abs(want))):
         return math.nan  # the modes are not those of this spectrum: no estimate
-    # The deciding modes with the trivial one (floor <= 0.9): a real orthonormal basis Q of their span, whose
-    # collocation polynomials over the period come from one block sweep (xs[-1] = M Q).
-    Q = _ritz_basis(V[:, np.abs(ev) >= floor])
+    # the deciding modes with the trivial one (floor <= 0.9)
+    return want, _ritz_basis(V[:, np.abs(ev) >= floor])
+
+
+def _distance(want: np.ndarray, H: np.ndarray) -> float:
+    """The largest distance of a deciding multiplier from the nearest eigenvalue of H, relative to max(1, |mu|)."""
+    ev = np.linalg.eigvals(H)
+    return float(np.max(np.min(np.abs(want[:, None] - ev[None, :]), axis=1) / np.maximum(1.0, np.abs(want))))
+
+
+def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin: Any, spectrum: np.ndarray,
+               modes: tuple[np.ndarray, np.ndarray] | None = None, n_trivial: int = 1) -> float:
+    """The largest estimated error of the deciding multipliers (the non-trivial ones of modulus at least
+    :data:`DECIDING` times min(1, the leading non-trivial modulus), and at least :data:`FAST`), relative to
+    max(1, |mu|), from the running defects of their Floquet modes (module docstring, "Propagated mode defects").
+    Dimensionless; 0 where no multiplier is deciding, NaN where the defects are not finite or ``modes`` lacks a
+    deciding multiplier.
+
+    lin: the orbit's :class:`~._linear.Linearisation`; spectrum: its multipliers (decreasing modulus); modes:
+    (multipliers (k,), eigenvectors (n, k)) of the collocation monodromy that hold the deciding ones and the
+    trivial one (the block Krylov method's Ritz pairs); default: from the explicit product of the transfer
+    matrices (NaN above :data:`MAX_DENSE` states)."""
+    d = _deciding_modes(orbit, lin, spectrum, modes, n_trivial)
+    if isinstance(d, float):
+        return d
+    want, Q = d
+    # the modes' collocation polynomials over the period from one block sweep (xs[-1] = M Q)
     N, m, n, c = orbit.N, scheme.m, orbit.n, Q.shape[1]
     xs, ws = lin.sweep(Q, np.zeros(2))
     H = Q.T @ xs[-1]
@@ -188,18 +217,43 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     # for the exact solutions Y of the variational equation from the same start: the exact M Q is M Q - E.
     rc = np.repeat(D[:, :, None, -1], m, axis=2).reshape(c, N, m * n)
     E = lin.sweep(np.zeros((n, c)), np.zeros(2), np.moveaxis(rc, 0, -1))[0][-1]
-    corrected = np.linalg.eigvals(H - Q.T @ E)
-    return float(np.max(np.min(np.abs(want[:, None] - corrected[None, :]), axis=1) / np.maximum(1.0, np.abs(want))))
+    return _distance(want, H - Q.T @ E)
+
+
+def halved_error(orbit: col.Orbit, scheme: col.Scheme, lin: Any, spectrum: np.ndarray,
+                 linearise: Callable[[col.Orbit], Any], modes: tuple[np.ndarray, np.ndarray] | None = None,
+                 n_trivial: int = 1) -> float:
+    """The change of the deciding multipliers (as in :func:`mode_error`) when every mesh interval is halved,
+    relative to max(1, |mu|): module docstring, "Halved intervals".  Dimensionless; 0 where no multiplier is
+    deciding, NaN where ``modes`` lacks one or the halved linearisation is singular or not finite.
+
+    linearise: orbit -> its :class:`~._linear.Linearisation` on that orbit's mesh (the branch's own solver, for
+    the orbit's polynomial sampled on the halved mesh); the other arguments as for :func:`mode_error`."""
+    d = _deciding_modes(orbit, lin, spectrum, modes, n_trivial)
+    if isinstance(d, float):
+        return d
+    want, Q = d
+    try:
+        MQ = linearise(remesh(orbit, scheme, halved_mesh(orbit.mesh))).sweep(Q, np.zeros(2))[0][-1]
+    except LinearSolveError:  # a singular interval block on the halved mesh: not estimated, the others stand
+        return math.nan
+    if not np.all(np.isfinite(MQ)):
+        return math.nan
+    return _distance(want, Q.T @ MQ)
 
 
 def multiplier_estimates(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin: Any,
                          spectrum: np.ndarray, modes: tuple[np.ndarray, np.ndarray] | None = None,
-                         n_trivial: int = 1) -> tuple[float, float]:
+                         n_trivial: int = 1, linearise: Callable[[col.Orbit], Any] | None = None
+                         ) -> tuple[float, float]:
     """(stiff_modulus, multiplier_error) that a recorded cycle carries: the frozen-coefficient model's
-    (:func:`resolution`) and, for the error, the larger of its estimate and the mode defects' (:func:`mode_error`;
-    each sees cases the other misses, module docstring, with its limits).  NaN only where neither is estimated."""
-    from ._floquet import nontrivial
-
+    (:func:`resolution`) and, for the error, the largest of its estimate, the mode defects' (:func:`mode_error`)
+    and, given ``linearise`` (orbit -> Linearisation, the branch's solver), the change on halved intervals
+    (:func:`halved_error`): each sees cases the others miss (module docstring, with the limits).  NaN only where
+    none is estimated."""
     nt = np.abs(nontrivial(np.asarray(spectrum), n_trivial))
     stiff, frozen = resolution(f, orbit, args, scheme, float(np.max(nt, initial=0.0)))
-    return stiff, float(np.fmax(frozen, mode_error(f, args, orbit, scheme, lin, spectrum, modes, n_trivial)))
+    error = np.fmax(frozen, mode_error(f, args, orbit, scheme, lin, spectrum, modes, n_trivial))
+    if linearise is not None:
+        error = np.fmax(error, halved_error(orbit, scheme, lin, spectrum, linearise, modes, n_trivial))
+    return stiff, float(error)

@@ -71,9 +71,10 @@ class CycleEvaluation:
     dense solver, the leading ones (block Krylov) with the sparse one); max_mu: largest non-trivial modulus;
     grad_W_cb, grad_max_mu: derivatives with respect to (alpha_f, eta) when requested, else None.
     stiff_modulus, multiplier_error: whether the mesh resolves the multipliers (``cont.multiplier_estimates``:
-    the frozen-coefficient model and the Floquet modes' defects): with ``multiplier_error`` above 1e-3 max_mu and
-    its gradient are not those of the cycle (at low speed on N = 16 they are those of the film's fast modes, which
-    collocation puts near the unit circle): raise N.  NaN: not estimated."""
+    the frozen-coefficient model, the Floquet modes' defects and their change on halved intervals): with
+    ``multiplier_error`` above 1e-3 max_mu and its gradient are not those of the cycle (at low speed on N = 16
+    they are those of the film's fast modes, which collocation puts near the unit circle): raise N.  NaN: not
+    estimated."""
 
     alpha_f: float
     eta: float
@@ -220,7 +221,8 @@ class FoilDesign:
         mu = an["spectrum"]
         nt = cont.nontrivial(mu, problem.n_trivial)
         stiff, mu_error = cont.multiplier_estimates(problem.f, problem.args, orbit, self.scheme, lin, mu, an["modes"],
-                                                    problem.n_trivial)
+                                                    problem.n_trivial,
+                                                    cont.bind_solver(problem, self.scheme, self.settings).linearise)
         ev = CycleEvaluation(float(alpha_f), float(eta), self.omega, orbit,
                              CycleEnergy(*(float(w) for w in orbit_energy(orbit, p, self.scheme.kind))), mu,
                              float(np.max(np.abs(nt))), bool(np.all(np.abs(nt) < 1.0)), int(sol.iterations),
