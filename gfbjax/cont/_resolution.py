@@ -15,11 +15,12 @@ its mesh estimate cannot see how well they are resolved.  Two ways it goes wrong
   16x2 grid at Omega_bar 0.1 and N = 16 the leading pair's modulus comes out 0.283 with Gauss points and 0.044
   with Radau points; it is 0.247 (N = 64 and 128 with both, and exp(lam T) of the equilibrium's rotor mode).
 
-Both are estimated by :func:`resolution` from the frozen-coefficient model: the eigenvalues lam of f_x at
-:data:`NODES` mesh points spread over the period (the largest estimate of them is kept, so that it does not hang
-on one point of the orbit; it still depends on the time origin where f_x changes much between those points, see
-"Limits" below), each mode's multiplier prod_i R(h_i lam) on the mesh against
-exp(lam T) exactly:
+Both are estimated by :func:`resolution` from the frozen-coefficient model: the eigenvalues lam of f_x at mesh
+nodes spread over the period (every node where that costs at most :data:`FROZEN_BUDGET` flops, n <= 100 at
+N = 20; else as many as fit, at least :data:`NODES`; the largest estimate of them is kept, so that it does not
+hang on one point of the orbit; with fewer nodes than intervals it depends on the time origin where f_x changes
+much between them, see "Limits" below), each mode's multiplier prod_i R(h_i lam) on the mesh against exp(lam T)
+exactly:
 
 * ``stiff_modulus``: the largest modulus the mesh gives a fast mode (exact multiplier below :data:`FAST`; its
   exact value is about 0): the band of spurious multipliers;
@@ -70,29 +71,39 @@ a recorded point carries the largest (:func:`multiplier_estimates`).  Cost per r
 few columns and the linearised field at N m (m + 2) points per column; on the reference branch 0.05-0.26 s, 5.4 s
 over the branch (benchmarks/README.md, cycle_branch.py and multiplier_accuracy.py).
 
-**Halved intervals** (:func:`halved_error`).  Neither estimate above sees a mode that is stiff on only part of the
-period (it oscillates within an interval there, on a smooth field): the frozen model sees it only where one of its
-:data:`NODES` points falls on that part, and the mode defects not at all.  In the review case
+**Halved intervals** (:func:`halved_error`).  Neither estimate above sees a mode that is stiff on only part of
+the period (it oscillates within an interval there, on a smooth field): the frozen model sees it only where one
+of its nodes falls on that part, and the mode defects not at all.  In the review case of session 11
 (tests/cont/test_cont_resolution.py) Radau points, N = 40, computed a pair of modulus 0.83 (stable) for the exact
-1.02 (unstable), both estimates 1.2e-4, unflagged; a quarter period later in time the frozen model flagged the same
-cycle.  The third estimate asks the discretisation itself: the orbit's polynomial is sampled on the mesh with every
-interval halved (not corrected there: it is already accurate, which the mesh estimate checks), the branch's solver
-linearises it, and one block sweep of that linearisation carries the basis Q above through the period.  The error of
-each deciding multiplier is its distance from the nearest eigenvalue of Q^T M_2N Q, relative to max(1, |mu|): the
-change on halving, which is (1 - 2^-p) of the error where the error falls as h^p (Gauss and Radau points, p = 2m and
-2m - 1), and a fraction of it where a kink makes it fall erratically (there the mode defects stand in).  Measured on
-the review case (estimate / true error): Radau N = 40 and 80, Gauss N = 20 and 40: 0.70-0.99 (true errors 2.9e-3 to
-0.25, mostly in the angle: the mode turns about 40 rad on its stiff stretch).  On the GFB reference grid it agrees
-with the mode defects (0.38-4.6x the true error against N = 128, benchmarks/multiplier_accuracy.py).  Cost per
-recorded point: one linearisation on 2N intervals (a compilation for 2N once per branch) and one block sweep of a
-few columns; on the reference branch 0.25 s, 16 s over the branch (benchmarks/README.md, cycle_branch.py).  Like the
-mode defects, it projects on the span of the modes at N, so it is first order in the change and an estimate, not a
-bound, where the modes themselves move.
+1.02 (unstable), both estimates 1.2e-4 (the frozen model then at two nodes), unflagged; a quarter period later in
+time the frozen model flagged the same cycle.  The third estimate asks the discretisation itself: the orbit's
+polynomial is sampled on the mesh with every interval halved (not corrected there: it is already accurate, which
+the mesh estimate checks) and linearised there by the branch's solver.  Where all multipliers are at hand (the
+dense solver, or at most :data:`EXPLICIT_N` states) both monodromies are formed and their whole spectra compared:
+each multiplier deciding on either mesh (at least :data:`DECIDING` of the larger leading modulus, and
+:data:`FAST`), its distance from the other spectrum, relative to max(1, |mu|).  Otherwise one block sweep on the
+halved mesh carries the basis Q above (the modes deciding at N) through the period, and each deciding multiplier's
+distance from the nearest eigenvalue of Q^T M_2N Q is taken; this projection is first order in the change, an
+estimate, not a bound, where the modes themselves move, and it cannot see a mode that the N mesh damps below the
+deciding floor.  The change on halving is (1 - 2^-p) of the error where the error falls as h^p (Gauss and Radau
+points, p = 2m and 2m - 1), and a fraction of it where a kink makes it fall erratically (there the mode defects
+stand in).  Measured on the review case (estimate / true error): Radau N = 40 and 80, Gauss N = 20 and 40:
+0.70-0.99 (true errors 2.9e-3 to 0.25, mostly in the angle: the mode turns about 40 rad on its stiff stretch).  On
+the GFB reference grid (projection) it agrees with the mode defects (0.38-4.6x the true error against N = 128,
+benchmarks/multiplier_accuracy.py).  Cost per recorded point: one linearisation on 2N intervals (a compilation for
+2N once per branch) and one block sweep of a few columns, or the two explicit monodromies; on the reference branch
+0.25 s, 16 s over the branch (benchmarks/README.md, cycle_branch.py).
 
-Limits.  A kink that the orbit crosses between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the
-period, N = 64) is missed by the collocation and the estimates alike, depending on the time origin.  Where
-:func:`mode_error` or :func:`halved_error` is NaN (the modes do not match the spectrum) the others stand,
-unflagged for that reason.
+Limits. The review of session 12 found two more ways past the estimates, both now caught where the frozen model
+freezes f_x at every node (tests/cont/test_cont_resolution.py): a mode that N and 2N both damp away (Radau points, a
+stiffness 2500x on a stretch of the period: exact multipliers 2.76 and 0.35, computed below 3e-4 on N = 20, 40 and
+80), and Gauss points on a stiff stretch that begins and ends on mesh nodes (R(-inf) = 1 on every interval of it, on
+both meshes). Where the frozen model has fewer nodes than intervals (large n: two nodes on the GFB reference grid)
+these cases are caught only where a node falls on the stretch, and with the sparse solver above :data:`EXPLICIT_N`
+states the halved estimate does not see a mode that the N mesh damps below the deciding floor. A kink that the orbit
+crosses between two quadrature points (a contact 1e-6 deep, open for 4e-4 of the period, N = 64) is missed by the
+collocation and the estimates alike, depending on the time origin. Where :func:`mode_error` or :func:`halved_error`
+is NaN (the modes do not match the spectrum) the others stand, unflagged for that reason.
 """
 from __future__ import annotations
 
@@ -110,12 +121,18 @@ from ._mesh import halved_mesh, remesh, running_defects_linear
 from ._newton import LinearSolveError
 
 __all__ = ["resolution", "mode_error", "halved_error", "multiplier_estimates", "DECIDING", "FAST", "NODES",
-           "MAX_DENSE"]
+           "FROZEN_BUDGET", "EXPLICIT_N", "MAX_DENSE"]
 
 #: a mode whose exact multiplier is below this modulus is a fast mode (:func:`resolution`'s ``stiff_modulus``)
 FAST = 1e-3
-#: mesh points (evenly spread over the period) at which the Jacobian is frozen
+#: the fewest mesh points (evenly spread over the period) at which the Jacobian is frozen
 NODES = 2
+#: the dense eigenvalue work (about 10 n^3 flops per node) the frozen model may spend per recorded point: it
+#: freezes the Jacobian at every mesh node where that fits (n <= 100 at N = 20), else at as many, evenly spread
+FROZEN_BUDGET = 2.5e8
+#: the largest state dimension for which :func:`halved_error` compares the whole spectra of both meshes when the
+#: linear solver is sparse (a block sweep of n columns per mesh); the dense solver always does
+EXPLICIT_N = 64
 #: a mode decides (stability, events, the leading multiplier) when its exact or discrete multiplier reaches this
 #: fraction of the leading non-trivial modulus (capped at 1): a spurious band further in changes none of them
 DECIDING = 0.9
@@ -136,7 +153,8 @@ def resolution(f: Callable, orbit: col.Orbit, args: Any, scheme: col.Scheme,
     if orbit.n > MAX_DENSE:
         return math.nan, math.nan
     N = orbit.N
-    at = np.unique((np.arange(NODES) * N) // NODES)
+    k = min(N, max(NODES, int(FROZEN_BUDGET // (10.0 * orbit.n ** 3))))
+    at = np.unique((np.arange(k) * N) // k)
     J = np.asarray(_jacobians(f, jnp.asarray(np.asarray(orbit.xm)[at]), orbit.lam, args))
     h = float(orbit.T) * np.diff(np.asarray(orbit.mesh, float))
     T = float(np.sum(h))
@@ -220,21 +238,48 @@ def mode_error(f: Callable, args: Any, orbit: col.Orbit, scheme: col.Scheme, lin
     return _distance(want, H - Q.T @ E)
 
 
+def _spectra_change(mu: np.ndarray, mu2: np.ndarray, n_trivial: int) -> float:
+    """The largest distance, relative to max(1, |mu|), of a deciding multiplier of either spectrum (non-trivial, of
+    modulus at least :data:`DECIDING` times min(1, the leading non-trivial modulus of both), and at least
+    :data:`FAST`) from the other spectrum's non-trivial multipliers; 0 where none is deciding."""
+    a, b = nontrivial(mu, n_trivial), nontrivial(mu2, n_trivial)
+    if a.size == 0 or b.size == 0:
+        return 0.0
+    floor = max(DECIDING * min(1.0, float(max(np.max(np.abs(a)), np.max(np.abs(b))))), FAST)
+    out = 0.0
+    for x, y in ((a, b), (b, a)):
+        x = x[np.abs(x) >= floor]
+        if x.size:
+            out = max(out, float(np.max(np.min(np.abs(x[:, None] - y[None, :]), axis=1) / np.maximum(1.0, np.abs(x)))))
+    return out
+
+
 def halved_error(orbit: col.Orbit, scheme: col.Scheme, lin: Any, spectrum: np.ndarray,
                  linearise: Callable[[col.Orbit], Any], modes: tuple[np.ndarray, np.ndarray] | None = None,
                  n_trivial: int = 1) -> float:
-    """The change of the deciding multipliers (as in :func:`mode_error`) when every mesh interval is halved,
-    relative to max(1, |mu|): module docstring, "Halved intervals".  Dimensionless; 0 where no multiplier is
-    deciding, NaN where ``modes`` lacks one or the halved linearisation is singular or not finite.
+    """The change of the deciding multipliers when every mesh interval is halved, relative to max(1, |mu|):
+    module docstring, "Halved intervals".  With all multipliers at hand (the dense solver: ``modes`` None, or at
+    most :data:`EXPLICIT_N` states) both whole spectra are compared (both from the transfer matrices, so that they
+    are alike), and a multiplier deciding on either mesh counts; otherwise the deciding modes at N (as in :func:`mode_error`) are carried through the halved mesh.
+    Dimensionless; 0 where no multiplier is deciding, NaN where ``modes`` lacks one or the halved linearisation is
+    singular or not finite.
 
     linearise: orbit -> its :class:`~._linear.Linearisation` on that orbit's mesh (the branch's own solver, for
     the orbit's polynomial sampled on the halved mesh); the other arguments as for :func:`mode_error`."""
-    d = _deciding_modes(orbit, lin, spectrum, modes, n_trivial)
+    explicit = (modes is None and orbit.n <= MAX_DENSE) or orbit.n <= EXPLICIT_N
+    d = None if explicit else _deciding_modes(orbit, lin, spectrum, modes, n_trivial)
     if isinstance(d, float):
         return d
-    want, Q = d
     try:
-        MQ = linearise(remesh(orbit, scheme, halved_mesh(orbit.mesh))).sweep(Q, np.zeros(2))[0][-1]
+        fine = linearise(remesh(orbit, scheme, halved_mesh(orbit.mesh)))
+        if explicit:
+            G, G2 = lin.transfer_matrices(), fine.transfer_matrices()
+            if not (np.all(np.isfinite(G)) and np.all(np.isfinite(G2))):
+                return math.nan
+            return _spectra_change(np.linalg.eigvals(monodromy_product(G)),
+                                   np.linalg.eigvals(monodromy_product(G2)), n_trivial)
+        want, Q = d
+        MQ = fine.sweep(Q, np.zeros(2))[0][-1]
     except LinearSolveError:  # a singular interval block on the halved mesh: not estimated, the others stand
         return math.nan
     if not np.all(np.isfinite(MQ)):
