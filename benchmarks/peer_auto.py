@@ -31,7 +31,8 @@ instead), compiled against the installed AUTO library and run in a temporary fol
    (a step |dx| <= tol (1 + max|x|), the same form as AUTO's EPSU), newton_max_iter = 8.  gfbjax runs with
    each linear solver: ``cont.DenseCondensation()`` (all multipliers, PeriodicQR) and ``cont.SparseSweep()``
    (``CycleProblem(jac_sparsity=...)`` with the exact pattern of the discretisation: u_i couples to u_{i+-1},
-   v_i to v_{i+-1}, and u_i, v_i to each other; Arnoldi, 12 leading multipliers) for n >= ``--sparse-min-n``.
+   v_i to v_{i+-1}, and u_i, v_i to each other; the default block Krylov multipliers, 12 leading, and the
+   Newton-Picard preconditioning of its GMRES solves) for n >= ``--sparse-min-n``.
    Timed; seconds per point = branch wall time / points computed.
 
 Compilation (gfbjax): the cycle branch runs twice in the same process; the first run compiles every kernel the

@@ -353,7 +353,8 @@ class CycleCurve(Curve):
         return col.natural_constraint(ref, lam)
 
     def correct(self, pred, con):
-        return self.solver.correct(pred, con, self.settings.newton)
+        # the last point's leading Floquet subspace (the block Krylov method's warm start) preconditions the solves
+        return self.solver.correct(pred, con, self.settings.newton, subspace=self.memo.get("krylov_start"))
 
     def null_tangent(self, X):
         # At a fold of cycles the Jacobian at fixed lam is singular, but that of the collocation equations and

@@ -51,7 +51,7 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import Checkpoint
 from ._newton import LinearSolveError
-from ._localise import Found, add_discretisation_error, bracket, localise, step_span
+from ._localise import Found, add_discretisation_error, bracket, localise, merge_unresolved, step_span
 from ._results import Outcome, SpecialPoint
 
 __all__ = ["Curve", "continue_curve"]
@@ -216,8 +216,8 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     """
     restored = None if checkpoint is None else checkpoint.open(curve.kind, settings)
     if restored is not None and restored.outcome is not None:
-        return curve.branch(restored.points, restored.special, restored.special_states, restored.outcome,
-                            restored.message, settings)
+        return curve.branch(restored.points, merge_unresolved(restored.special), restored.special_states,
+                            restored.outcome, restored.message, settings)
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -235,7 +235,7 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
             bar.close()
         if checkpoint is not None:
             checkpoint.finish(outcome, message)
-    return curve.branch(run.points, run.special, run.special_states, outcome, message, settings)
+    return curve.branch(run.points, merge_unresolved(run.special), run.special_states, outcome, message, settings)
 
 
 def _resume(run: _Run, restored: Any) -> tuple[Any, Any, Any, Any, float] | None:
@@ -332,6 +332,17 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         if tests is not None and s.detect:
             found = [f for f in (localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
                                  for kind in c.events(tests, tests_n, s.detect)) if f is not None]
+        jump = next((f for f in found if f.jumped), None)
+        if jump is not None:
+            # the step went from one branch to another (its test functions change sign between two solutions that
+            # stay apart however close the bracket): no event, a step too long for the curve's bend
+            if 0.5 * ds >= s.ds_min:
+                ds *= 0.5
+                continue
+            return Outcome.STEP_TOO_SMALL, (f"the correction jumps to another branch between lam = {c.lam(X):.6g} "
+                                            f"and {c.lam(Xn):.6g} (the {jump.kind} test function changes sign "
+                                            f"across the gap): no step above ds_min = {s.ds_min:g} stays on "
+                                            f"this branch")
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come

@@ -115,10 +115,12 @@ class BoundSolver(abc.ABC):
     scheme: col.Scheme
 
     @abc.abstractmethod
-    def correct(self, orbit: col.Orbit, con: col.Constraint, newton: NewtonSettings
-                ) -> tuple[NewtonSolution, Linearisation | None]:
+    def correct(self, orbit: col.Orbit, con: col.Constraint, newton: NewtonSettings,
+                subspace: np.ndarray | None = None) -> tuple[NewtonSolution, Linearisation | None]:
         """Newton correction; the solution's ``aux`` is the normalised tangent (continuation row of ``con`` fixes
-        its orientation); the linearisation is at the converged orbit (None when not converged)."""
+        its orientation); the linearisation is at the converged orbit (None when not converged).  ``subspace``:
+        an orthonormal basis (n, c) of the leading Floquet subspace of a nearby orbit, a hint a solver may use
+        to precondition its solves (the result does not depend on it)."""
 
     @abc.abstractmethod
     def linearise(self, orbit: col.Orbit, con: col.Constraint | None = None) -> Linearisation:
@@ -254,7 +256,7 @@ class _DenseBound(BoundSolver):
     def __init__(self, problem: CycleProblem, scheme: col.Scheme):
         self.problem, self.scheme = problem, scheme
 
-    def correct(self, orbit, con, newton):
+    def correct(self, orbit, con, newton, subspace=None):  # direct solves: nothing to precondition
         sol = _dense_correct(self.problem.f, self.problem.args, orbit, con, self.scheme, newton)
         if not sol.converged:
             return sol, None
@@ -287,7 +289,9 @@ class SparseSweep(LinearSolver):
     chord: a Newton step reuses the last factorisations while each step cuts the residual by at least this factor
     (residual <= chord * previous residual; 0: a new factorisation at every step); the converged orbit always
     gets its own;
-    permc_spec: SuperLU column ordering."""
+    permc_spec: SuperLU column ordering;
+    deflate: precondition the GMRES solves of a correction by the leading Floquet subspace of the last point of the
+    branch (Newton-Picard, :class:`~._sweeps.NewtonPicard`): the same solutions in fewer sweeps."""
 
     name = "sparse"
     gmres_rtol: float = 1e-11
@@ -296,6 +300,7 @@ class SparseSweep(LinearSolver):
     gmres_forcing: float = 1e-3
     chord: float = 1e-2
     permc_spec: str = "COLAMD"
+    deflate: bool = True
 
     def __post_init__(self) -> None:
         put = partial(store_range, self)
@@ -304,6 +309,8 @@ class SparseSweep(LinearSolver):
         put("chord", 0.0, 1.0, hi_open=True)
         put("gmres_restart", 1, 10**6, integer=True)
         put("gmres_maxiter", 1, 10**6, integer=True)
+        if not isinstance(self.deflate, bool):
+            raise ValueError(f"deflate must be True or False, got {self.deflate!r}")
         if self.permc_spec not in ("COLAMD", "NATURAL", "MMD_ATA", "MMD_AT_PLUS_A"):
             raise ValueError(f"permc_spec must be one of COLAMD, NATURAL, MMD_ATA, MMD_AT_PLUS_A, "
                              f"got {self.permc_spec!r}")

@@ -146,7 +146,9 @@ class CycleSettings(_StepSettings):
     is a step over which more multipliers (eigenvalues) cross the unit circle (imaginary axis) than the sign
     changes of the test functions account for (two events in one step cancel in a test function).  A branch
     point whose localisation fails only next to it (the corrections are singular there) is reported unlocated
-    without refinement.  Neither check shrinks ds below ``ds_min``.
+    without refinement.  A step whose localisation closes its bracket on two solutions that stay apart (two
+    branches: no event) is halved without that count, down to ``ds_min``, where the branch ends
+    (``STEP_TOO_SMALL``, "jumps to another branch").  Neither check shrinks ds below ``ds_min``.
     Corrector: ``newton_tol`` (residual max-norm accepted after a small step), ``newton_step_tol`` (a step is small
     when |dx| <= tol (1 + max|x|)), ``newton_max_iter``.
     ``algorithm``: :class:`PseudoArclength` (default) or :class:`Natural`.

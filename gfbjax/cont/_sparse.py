@@ -50,7 +50,7 @@ from ._linear import BoundSolver
 from ._results import Outcome
 from ._newton import LinearSolveError, NewtonSettings, NewtonSolution, solve_host
 from ._sparsity import Coloring, color_pattern, jacobian_values
-from ._sweeps import IntervalSweeps
+from ._sweeps import IntervalSweeps, NewtonPicard
 
 
 @partial(jax.jit, static_argnums=(0, 3, 4))
@@ -166,16 +166,28 @@ class SparseCollocation(BoundSolver):
         return _sparse_linearisation(self, orbit, con if con is not None else col.natural_constraint(orbit,
                                                                                                      orbit.lam))
 
-    def correct(self, orbit: col.Orbit, con: col.Constraint, newton: NewtonSettings
-                ) -> tuple[NewtonSolution, IntervalSweeps | None]:
+    def correct(self, orbit: col.Orbit, con: col.Constraint, newton: NewtonSettings,
+                subspace: np.ndarray | None = None) -> tuple[NewtonSolution, IntervalSweeps | None]:
         """Newton on the host: each evaluation factorises at the iterate and solves for the step; the converged
-        point keeps its linearisation, which gives the tangent (one more GMRES solve) and later the multipliers."""
+        point keeps its linearisation, which gives the tangent (one more GMRES solve) and later the multipliers.
+        ``subspace``: an orthonormal basis (n, c) of the leading Floquet subspace of a nearby orbit (the last
+        point's); with ``settings.deflate`` it preconditions every GMRES solve of the correction
+        (:class:`~._sweeps.NewtonPicard`, built once, on the first linearisation)."""
         N, m, n = orbit.N, self.scheme.m, self.n
         f, args = self.problem.f, self.problem.args
 
         chord = self.settings.chord if newton.verify_residual else 0.0
-        # the factorisations a chord step may reuse, the last residual, and the evaluations so far
-        made = {"lin": None, "last": np.inf, "calls": 0}
+        # the factorisations a chord step may reuse, the last residual, the evaluations so far, and the
+        # preconditioner (None: not built yet; False: none to build)
+        made = {"lin": None, "last": np.inf, "calls": 0,
+                "pc": None if self.settings.deflate and subspace is not None else False}
+
+        def fresh(o):
+            lin = self.linearise(o, con)
+            if made["pc"] is None:
+                made["pc"] = NewtonPicard.build(lin, subspace) or False
+            lin.preconditioner = made["pc"] or None
+            return lin
 
         def linearise(o, accepts):
             rc, rper, rs = (np.asarray(a) for a in _residual(f, args, o, con, self.scheme))
@@ -183,7 +195,7 @@ class SparseCollocation(BoundSolver):
             if not np.isfinite(rnorm):  # ends the iteration as NONFINITE without a factorisation
                 return rnorm, col.Orbit(jnp.zeros_like(o.mesh), o.xm * np.nan, o.xi, o.T, o.lam), None
             if accepts(rnorm):  # converged here: the linearisation at this orbit gives the tangent, no step
-                lin = self.linearise(o, con)
+                lin = fresh(o)
                 return rnorm, col.Orbit(jnp.zeros_like(o.mesh), jnp.zeros_like(o.xm), jnp.zeros_like(o.xi),
                                         jnp.zeros_like(o.T), jnp.zeros_like(o.lam)), lin
             # chord step: while the last step cut the residual by the factor ``chord`` or more, the old
@@ -199,7 +211,7 @@ class SparseCollocation(BoundSolver):
             # the last two steps of the iteration budget are full Newton steps: a slow solve from a poor guess
             # must not run out of iterations because of a chord step that exact Newton would not have taken
             if lin is None or not rnorm <= chord * last or made["calls"] >= newton.max_iter - 1:
-                lin = self.linearise(o, con)
+                lin = fresh(o)
                 made["lin"] = lin
             else:
                 rtol = min(self.settings.gmres_forcing, max(rtol, 0.1 * rnorm / last))

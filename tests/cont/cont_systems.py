@@ -122,3 +122,26 @@ def saddle_family(x, lam, args):
     """x' = lam x + y, y' = x + lam y, z' = -3 z: eigenvalues lam +- 1 and -3; at lam = 0 the real pair is +-1
     (neutral saddle: mu_1 + mu_2 = 2 lam = 0), and there is no Hopf point."""
     return jnp.stack([lam * x[0] + x[1], x[0] + lam * x[1], -3.0 * x[2]])
+
+
+def ring(x, lam, p):
+    """A ring of k diffusively coupled Hopf oscillators (n = 2k, p = (w, d)): the synchronous cycle of radius
+    sqrt(lam), period 2 pi / w, with multipliers exp(-(2 lam + dq) T) and exp(-dq T), dq = 4 d sin^2(pi q / k)."""
+    w, d = p[0], p[1]
+    a, b = x[0::2], x[1::2]
+    r2 = a * a + b * b
+    lap = lambda u: jnp.roll(u, 1) - 2 * u + jnp.roll(u, -1)  # noqa: E731
+    da = lam * a - w * b - a * r2 + d * lap(a)
+    db = w * a + lam * b - b * r2 + d * lap(b)
+    return jnp.stack([da, db], axis=1).ravel()
+
+
+def ring_pattern(k):
+    """The Jacobian pattern of :func:`ring` with k oscillators (nearest neighbours on the ring)."""
+    n = 2 * k
+    P = np.zeros((n, n), bool)
+    for i in range(k):
+        for j in (i - 1, i, i + 1):
+            jj = j % k
+            P[2 * i:2 * i + 2, 2 * jj:2 * jj + 2] = True
+    return P

@@ -16,27 +16,9 @@ from gfbjax.cont import Arnoldi, DenseCondensation, PeriodicQR, SparseSweep, bin
 from gfbjax.cont._sparse import SparseCollocation
 from gfbjax.cont._sparsity import color_pattern, jacobian_values
 
+from cont_systems import ring, ring_pattern
+
 K, LAM, W, D = 80, 0.5, 2 * np.pi, 1.0
-
-
-def ring(x, lam, p):
-    w, d = p[0], p[1]
-    a, b = x[0::2], x[1::2]
-    r2 = a * a + b * b
-    lap = lambda u: jnp.roll(u, 1) - 2 * u + jnp.roll(u, -1)  # noqa: E731
-    da = lam * a - w * b - a * r2 + d * lap(a)
-    db = w * a + lam * b - b * r2 + d * lap(b)
-    return jnp.stack([da, db], axis=1).ravel()
-
-
-def ring_pattern(k):
-    n = 2 * k
-    P = np.zeros((n, n), bool)
-    for i in range(k):
-        for j in (i - 1, i, i + 1):
-            jj = j % k
-            P[2 * i:2 * i + 2, 2 * jj:2 * jj + 2] = True
-    return P
 
 
 def analytic_multipliers(k, lam, w, d):

@@ -9,23 +9,40 @@ import pytest
 from gfbjax.cont import EquilibriumProblem, EquilibriumSettings, Outcome, continue_equilibria
 
 
-def imperfect_pitchfork(x, p, args):
-    """x' = 1e-4 + p x - x^3: the branch from x ~ 1e-4 at p = -1 bends sharply near p = 0 into x ~ sqrt(p); the
-    unstable middle branch x ~ -1e-4 / p lies close to the prediction made along the old tangent."""
-    return jnp.array([1e-4 + p * x[0] - x[0] ** 3])
+def imperfect_pitchfork(eps):
+    """x' = eps + p x - x^3: the branch from x ~ eps at p = -1 bends sharply near p = 0 (within x ~ eps^(1/3),
+    p ~ eps^(2/3)) into x ~ sqrt(p); the unstable middle branch x ~ -eps / p lies close to the prediction made along
+    the old tangent, and the lower branch close to the corrections inside a step that overshoots the corner."""
+    return lambda x, p, args: jnp.array([eps + p * x[0] - x[0] ** 3])
 
 
-@pytest.mark.parametrize("ds_max", [0.05, 0.1, 0.2, 0.3, 0.5])
-def test_no_jump_to_the_middle_branch(ds_max):
-    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork, 1),
+@pytest.mark.parametrize("eps", [1e-4, 1e-6, 1e-8])
+@pytest.mark.parametrize("ds_max", [0.05, 0.2, 0.5, 1.0])
+def test_no_jump_to_the_middle_branch(eps, ds_max):
+    """Session 13 (fresh-user review): with eps = 1e-6 and ds_max >= 0.2 the step jumped from the bend to the
+    middle branch, reported a BP that does not exist and labelled the rest unstable.  The BP test changed sign
+    between two solutions that stayed apart however close the localisation's bracket: such a step is now
+    shortened, like one whose tangent turns too far."""
+    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork(eps), 1),
                              EquilibriumSettings(ds=0.05, ds_max=ds_max, lam_min=-1.0, lam_max=1.0),
-                             np.array([1e-4]), -1.0)
+                             np.array([eps]), -1.0)
     assert br.outcome is Outcome.REACHED_END, br.message
     x = br.states["x"][:, 0]
-    # every point is the largest real root of x^3 - p x - 1e-4 (numpy.roots, independent of the continuation)
-    upper = [max(r.real for r in np.roots([1.0, 0.0, -p, -1e-4]) if abs(r.imag) < 1e-9) for p in br.lam]
+    # every point is the largest real root of x^3 - p x - eps (numpy.roots, independent of the continuation)
+    upper = [max(r.real for r in np.roots([1.0, 0.0, -p, -eps]) if abs(r.imag) < 1e-9) for p in br.lam]
     np.testing.assert_allclose(x, upper, rtol=1e-8)
     assert np.all(br.stable) and br.special == []  # one stable branch, no bifurcation on it
+
+
+def test_a_jump_that_no_step_above_ds_min_avoids_ends_the_branch():
+    """Where even ds_min overshoots the bend, the branch ends there and says why, instead of going on along the
+    middle branch."""
+    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork(1e-6), 1),
+                             EquilibriumSettings(ds=0.05, ds_min=0.04, ds_max=0.2, lam_min=-1.0, lam_max=1.0),
+                             np.array([1e-6]), -1.0)
+    assert br.outcome is Outcome.STEP_TOO_SMALL, br.message
+    assert "jumps to another branch" in br.message
+    assert np.all(br.states["x"][:, 0] > 0) and np.all(br.stable) and br.special == []
 
 
 def circle(x, p, args):
