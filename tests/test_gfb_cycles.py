@@ -198,3 +198,24 @@ def test_sparse_backend_matches_dense(params, cycle):
     assert trivial_error(mu) < 1e-8
     tight = cont.analyse(prob, lin, cont.BlockKrylov(tol_inside=1e-11))["spectrum"]
     np.testing.assert_allclose(np.abs(tight[:8]), ref, atol=1e-8)
+
+
+def test_whirl_cycles_of_the_validation_case_carry_their_flags():
+    """Trust issue, case i: the self-excited whirl cycles born at the Hopf point of the Table 1 validation case
+    (15 N, rigid rotor; 16x2 here, 6 points).  An autonomous cycle's trivial multiplier is exactly +1; next to this
+    subcritical Hopf point the amplitude's multiplier sits close to it (a near-Jordan pair), and the computed one
+    misses +1 by 1e-4 to 1e-2 (24x3, 137 points: 133 flagged).  Before, these cycles were labelled stable or
+    unstable with no warning.  Now every point whose trivial multiplier misses +1 by more than ``trivial_tol`` is
+    flagged, and such points exist on this branch (the check is not vacuous); the Hopf point itself is located."""
+    from gfbjax.analyses.cycles import continue_gfb_equilibria, continue_gfb_hopf_cycles, default_cycle_settings
+
+    params = gfbjax.variation("validation15N", Nx=16, Nz=2).nondim()
+    eq = continue_gfb_equilibria(params, 0.4, 0.9)
+    hopf = [s for s in eq.special if s.type == "HOPF"]
+    assert hopf and hopf[0].located, [(s.type, s.lam, s.located) for s in eq.special]
+    settings = default_cycle_settings(m=4, N=16, ds=0.02, ds_max=0.5, dlam_max=0.01, max_points=6)
+    cyc = continue_gfb_hopf_cycles(params, eq, 0, settings)
+    assert len(cyc) >= 4, cyc.message
+    off = np.asarray(cyc.trivial_error) > settings.trivial_tol
+    assert off.any(), np.asarray(cyc.trivial_error)
+    assert np.all(np.asarray(cyc.flagged)[off]), (np.asarray(cyc.trivial_error), np.asarray(cyc.flagged))

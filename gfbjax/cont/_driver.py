@@ -51,7 +51,7 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import Checkpoint
 from ._newton import LinearSolveError
-from ._localise import Found, add_discretisation_error, bracket, localise, merge_unresolved, step_span
+from ._localise import Found, add_discretisation_error, bracket, localise, step_span
 from ._results import Outcome, SpecialPoint
 
 __all__ = ["Curve", "continue_curve"]
@@ -216,8 +216,8 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     """
     restored = None if checkpoint is None else checkpoint.open(curve.kind, settings)
     if restored is not None and restored.outcome is not None:
-        return curve.branch(restored.points, merge_unresolved(restored.special), restored.special_states,
-                            restored.outcome, restored.message, settings)
+        return curve.branch(restored.points, restored.special, restored.special_states, restored.outcome,
+                            restored.message, settings)
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -235,7 +235,7 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
             bar.close()
         if checkpoint is not None:
             checkpoint.finish(outcome, message)
-    return curve.branch(run.points, merge_unresolved(run.special), run.special_states, outcome, message, settings)
+    return curve.branch(run.points, run.special, run.special_states, outcome, message, settings)
 
 
 def _resume(run: _Run, restored: Any) -> tuple[Any, Any, Any, Any, float] | None:

@@ -211,7 +211,7 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
                 lo, hi = info["bracket"]
                 found.lam_error = hi - lo
                 found.jumped = _solution_jumps(c, [(0.0, X), (ds, Xn)] + [(k, v[0].x) for k, v in solved.items()],
-                                               lo, hi, ds)
+                                               lo, hi)
     # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
     # jump to another branch makes the test function change sign far from zero, with or without failures)
     found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
@@ -227,18 +227,23 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
     return found
 
 
-def _solution_jumps(c: Any, points: list, lo: float, hi: float, ds: float) -> bool:
-    """Whether the corrected points at the ends of a closed bracket (lo, hi) of the arclength lie on two different
-    branches.  Along one branch the solution moves by about the bracket's width (unit speed in the arclength);
-    a test function may still jump there (a mesh node crossing a kink of the vector field).  Where the hyperplanes
-    of the bracket cut two branches, the solutions stay apart by the gap between them however close lo and hi:
-    the step jumped, and the sign change is no event of either branch (x' = eps + p x - x^3 near its corner)."""
+def _solution_jumps(c: Any, points: list, lo: float, hi: float) -> bool:
+    """Whether the corrected points at the ends of a bracket (lo, hi) of the arclength lie on two different
+    branches.  Each point lies on the hyperplane at distance s from the step's first point along its tangent; along
+    one branch two such points are about as far apart as the hyperplanes (hi - lo over the cosine of the angle
+    between the branch and that tangent), and a test function may still jump between them (a mesh node crossing
+    a kink of the vector field).  Where the hyperplanes cut two branches the points stay apart by the gap between
+    them however close lo and hi: the step jumped, and the sign change is no event of either branch
+    (x' = eps + p x - x^3 near its corner).  Ten times the bracket's width stands for an angle of 84 degrees (a step
+    that does not resolve the branch, to be halved as well); the floor, 1e-6 of the point's size, lies far above
+    the corrections' own error."""
     at = dict(points)
     if lo not in at or hi not in at:
         return False
     d = c.add(at[hi], c.scale(at[lo], -1.0))
     dist = math.sqrt(max(c.inner(d, d), 0.0))
-    return dist > 1e-2 * ds and dist > 100.0 * (hi - lo)
+    size = math.sqrt(max(c.inner(at[lo], at[lo]), 0.0))
+    return dist > 10.0 * (hi - lo) and dist > 1e-6 * (1.0 + size)
 
 
 def _across_the_gap(run: Any, solve_at: Callable, center: float, ds: float) -> tuple[float, float] | None:
@@ -399,40 +404,3 @@ def add_discretisation_error(run: Any, f: Found) -> None:
     if shifts:  # NaN (no estimate) only when every relocation failed
         finite = [v for v in shifts if np.isfinite(v)]
         f.lam_error += max(finite) if finite else math.nan
-
-
-def merge_unresolved(special: list) -> list:
-    """The special points with every odd run of *one* event seen several times merged into one.
-
-    A test function may change sign again and again within its own discretisation error: near a fold of a cycle
-    whose vector field has a kink, each mesh node that crosses the kink makes the discrete tangent, hence the fold
-    test, jump (the kinked oscillator of ``tests/cont/test_cont_mesh.py`` at N = 80: three bracketed LPCs within
-    2e-5 of its one fold).  Points of one type, all bracketed or not localised, consecutive among the points of
-    that type and whose intervals lam +- lam_error overlap, cannot be told apart on this discretisation; an odd
-    number of them is one crossing net, and is reported as one: the member nearest the middle of the run, with
-    its error widened to cover every member's interval.  An even number may be two events or none, and is kept
-    as it is.  Located points are never merged."""
-    out = list(special)
-    by_type: dict[str, list] = {}
-    for p in out:
-        by_type.setdefault(p.type, []).append(p)
-    drop = set()
-    for pts in by_type.values():
-        pts = sorted(pts, key=lambda p: p.index)
-        run = []
-        for p in pts + [None]:
-            fits = (p is not None and not p.located and np.isfinite(p.lam_error) and run
-                    and p.lam - p.lam_error <= max(q.lam + q.lam_error for q in run)
-                    and p.lam + p.lam_error >= min(q.lam - q.lam_error for q in run))
-            if fits:
-                run.append(p)
-                continue
-            if len(run) >= 3 and len(run) % 2 == 1:
-                lo = min(q.lam - q.lam_error for q in run)
-                hi = max(q.lam + q.lam_error for q in run)
-                keep = min(run, key=lambda q: abs(q.lam - 0.5 * (lo + hi)))
-                keep.lam_error = max(keep.lam - lo, hi - keep.lam)
-                drop.update(id(q) for q in run if q is not keep)
-            run = [p] if p is not None and not p.located and np.isfinite(p.lam_error) else []
-    return [p for p in out if id(p) not in drop]
-

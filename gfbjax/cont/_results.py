@@ -95,8 +95,10 @@ class SpecialPoint:
     A bracketed BP deserves suspicion: the branch-point test also flips when the corrector jumps from one branch
     to a nearby one (an imperfect bifurcation with a large step), and then the points past it lie on the other
     branch; rerun with a smaller ``ds_max``.  (The driver itself halves a step whose localisation closes its
-    bracket on two solutions that stay apart, and never reports such a point.)  An odd run of unlocated points of
-    one type with overlapping error intervals is reported as one (:func:`~._localise.merge_unresolved`).
+    bracket on two solutions that stay apart, and never reports such a point.)  Several bracketed points of one
+    type within each other's error bars may be one crossing seen several times: a discrete branch that zig-zags
+    within its own error (at a fold where mesh nodes cross a kink of f).  They are all reported, each with an error
+    bar that covers the exact crossing; telling one event from several is left to a finer mesh.
     lam_error: an estimate of the error of ``lam``, in its units (NaN: none).  The test function vanishes to
     ``locate_tol`` on *this* discretisation; the zero of the exact problem lies about ``lam_error`` away.  For a
     located cycle point: how far the zero moves when it is located again on the mesh with every interval halved

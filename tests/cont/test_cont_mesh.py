@@ -254,12 +254,13 @@ def test_kink_folds_adaptive_vs_fixed():
     _error_estimates_match(adapted)
 
 
-def test_one_fold_seen_three_times_is_reported_once():
-    """Session 13 (fresh-user review): with default settings but N = 80 the second fold came out as three bracketed
-    LPCs within 2e-5 (1.1445269, 1.1445437, 1.1445464): each mesh adaptation moved a node across the kink and the
-    discrete tangent's lam component jumped (+3.1e-3 -> -5.8e-3), a zig-zag of the discrete branch well inside each
-    point's own error bar.  An odd run of unlocated points of one type whose error intervals overlap is one
-    crossing net: one LPC per fold now, each within its error bar of the shooting value."""
+def test_every_fold_reported_at_N_80_covers_a_true_fold():
+    """With default settings but N = 80 the second fold comes out as three bracketed LPCs within 2e-5 (1.1445269,
+    1.1445437, 1.1445464; session 13, fresh-user review): each mesh adaptation moved a node across the kink and the
+    discrete tangent's lam component jumped (+3.1e-3 -> -5.8e-3), a zig-zag of the discrete branch within its own
+    error.  Merging such runs was tried and dropped (it hid distinct events whose error bars overlap: three Hopf
+    points 1e-3 apart with other frequencies).  What holds: every reported fold lies within its error bar of a
+    shooting value, none is called located beyond the true two, and each true fold is reported."""
     w0 = 0.85
     H = 0.1 / (1 - w0 ** 2 + 0.1j * w0)
 
@@ -268,33 +269,12 @@ def test_one_fold_seen_three_times_is_reported_once():
         return np.stack([np.real(H * e), np.real(1j * w0 * H * e), e.real, -e.imag], -1)
     st = CycleSettings(N=80, lam_min=0.8, lam_max=1.3)
     br = continue_cycles(CycleProblem(kinked_oscillator, 4), st, start_from_function(x_of_t, 2 * np.pi / w0, w0, st))
-    lpc = sorted(br.special_of("LPC"), key=lambda s: s.lam)
-    assert len(lpc) == 2, [(s.lam, s.lam_error, s.located) for s in lpc]
-    for s, fold in zip(lpc, FOLDS):
-        assert abs(s.lam - fold) <= s.lam_error, (s.lam, fold, s.lam_error)
-
-
-def test_merging_keeps_located_points_and_even_runs():
-    """The merge itself, on hand-made points: an odd run of overlapping unlocated points becomes its middle member
-    with an interval covering all; an even run (two folds or none: undecidable) is kept, as are located points and
-    points whose intervals do not overlap."""
-    from gfbjax.cont import SpecialPoint
-    from gfbjax.cont._localise import merge_unresolved
-
-    def sp(lam, err, index, located=False, kind="LPC"):
-        return SpecialPoint(type=kind, lam=lam, index=index, spectrum=np.zeros(2), located=located, residual=0.1,
-                            lam_error=err)
-    odd = [sp(1.0, 0.02, 1), sp(1.01, 0.02, 2), sp(0.995, 0.02, 3)]
-    out = merge_unresolved(odd)
-    assert len(out) == 1 and out[0].lam == 1.0 and out[0].lam_error == pytest.approx(0.03)
-    even = [sp(1.0, 0.02, 1), sp(1.01, 0.02, 2)]
-    assert merge_unresolved(even) == even
-    located = [sp(1.0, 0.02, 1), sp(1.01, 0.02, 2, located=True), sp(0.995, 0.02, 3)]
-    assert merge_unresolved(located) == located
-    apart = [sp(1.0, 0.001, 1), sp(1.01, 0.001, 2), sp(1.02, 0.001, 3)]
-    assert merge_unresolved(apart) == apart
-    mixed = [sp(1.0, 0.02, 1), sp(1.01, 0.02, 2, kind="PD"), sp(0.995, 0.02, 3), sp(1.0, 0.02, 4)]
-    assert [p.type for p in merge_unresolved(mixed)] == ["LPC", "PD"]
+    lpc = br.special_of("LPC")
+    for s in lpc:
+        assert min(abs(s.lam - f) for f in FOLDS) <= s.lam_error, (s.lam, s.lam_error)
+    assert sum(s.located for s in lpc) <= 2
+    for f in FOLDS:
+        assert any(abs(s.lam - f) <= s.lam_error for s in lpc), f
 
 
 def _error_estimates_match(branch):

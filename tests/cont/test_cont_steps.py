@@ -9,28 +9,36 @@ import pytest
 from gfbjax.cont import EquilibriumProblem, EquilibriumSettings, Outcome, continue_equilibria
 
 
-def imperfect_pitchfork(eps):
-    """x' = eps + p x - x^3: the branch from x ~ eps at p = -1 bends sharply near p = 0 (within x ~ eps^(1/3),
-    p ~ eps^(2/3)) into x ~ sqrt(p); the unstable middle branch x ~ -eps / p lies close to the prediction made along
-    the old tangent, and the lower branch close to the corrections inside a step that overshoots the corner."""
-    return lambda x, p, args: jnp.array([eps + p * x[0] - x[0] ** 3])
+def imperfect_pitchfork(eps, scale=1.0):
+    """x' = eps + p x - x^3 / scale^2: the branch from x ~ eps at p = -1 bends sharply near p = 0 (within
+    x ~ (eps scale^2)^(1/3)) into x ~ scale sqrt(p); the unstable middle branch x ~ -eps / p lies close to the
+    prediction made along the old tangent, and the lower branch close to the corrections inside a step that
+    overshoots the corner."""
+    return lambda x, p, args: jnp.array([eps + p * x[0] - x[0] ** 3 / scale ** 2])
 
 
-@pytest.mark.parametrize("eps", [1e-4, 1e-6, 1e-8])
+def _upper_root(eps, p, scale=1.0):
+    """The largest real root of x^3 / scale^2 - p x - eps (numpy.roots, independent of the continuation)."""
+    return max(r.real for r in np.roots([1.0 / scale ** 2, 0.0, -p, -eps]) if abs(r.imag) < 1e-9 * (1 + abs(r)))
+
+
+@pytest.mark.parametrize("eps, ds, scale", [(1e-4, 0.05, 1.0), (1e-6, 0.05, 1.0), (1e-9, 0.2, 1.0),
+                                            (1e-12, 0.05, 1.0), (1e-2, 500.0, 1e4)])
 @pytest.mark.parametrize("ds_max", [0.05, 0.2, 0.5, 1.0])
-def test_no_jump_to_the_middle_branch(eps, ds_max):
-    """Session 13 (fresh-user review): with eps = 1e-6 and ds_max >= 0.2 the step jumped from the bend to the
-    middle branch, reported a BP that does not exist and labelled the rest unstable.  The BP test changed sign
-    between two solutions that stayed apart however close the localisation's bracket: such a step is now
-    shortened, like one whose tangent turns too far."""
-    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork(eps), 1),
-                             EquilibriumSettings(ds=0.05, ds_max=ds_max, lam_min=-1.0, lam_max=1.0),
-                             np.array([eps]), -1.0)
+def test_no_jump_to_the_middle_branch(eps, ds, scale, ds_max):
+    """Session 13, two fresh-user reviews: with eps = 1e-6 and ds_max >= 0.2 the step jumped from the bend to the
+    middle branch, reported a BP that does not exist and labelled the rest unstable; a first fix (the solutions at
+    the ends of the localisation's bracket farther apart than 1e-2 ds) still missed eps = 1e-12, a bracket that
+    stalled at 7.7e-5 (eps = 1e-9, ds = 0.2) and states scaled by 1e4 (the last row: eps 1e-6 in the unscaled
+    variable, steps scaled alike).  The BP test changes sign between two solutions that stay apart however close
+    the bracket: such a step is now shortened, like one whose tangent turns too far."""
+    ds, ds_max = ds, ds_max * scale
+    br = continue_equilibria(EquilibriumProblem(imperfect_pitchfork(eps, scale), 1),
+                             EquilibriumSettings(ds=ds, ds_max=max(ds, ds_max), lam_min=-1.0, lam_max=1.0),
+                             np.array([_upper_root(eps, -1.0, scale)]), -1.0)
     assert br.outcome is Outcome.REACHED_END, br.message
     x = br.states["x"][:, 0]
-    # every point is the largest real root of x^3 - p x - eps (numpy.roots, independent of the continuation)
-    upper = [max(r.real for r in np.roots([1.0, 0.0, -p, -eps]) if abs(r.imag) < 1e-9) for p in br.lam]
-    np.testing.assert_allclose(x, upper, rtol=1e-8)
+    np.testing.assert_allclose(x, [_upper_root(eps, p, scale) for p in br.lam], rtol=1e-8)
     assert np.all(br.stable) and br.special == []  # one stable branch, no bifurcation on it
 
 
