@@ -12,13 +12,16 @@ of the two:
 * :meth:`IntervalSweeps.solve`: the bordered Newton system, reduced to the n + 2 unknowns :math:`(x_0, \delta p)`
   (periodicity, phase and continuation rows) and solved by GMRES whose product is one sweep;
 * :meth:`IntervalSweeps.solve_transpose`: :math:`J^T\lambda = g` the same way with adjoint sweeps;
-* the monodromy operator :math:`M = \Gamma_{N-1}\cdots\Gamma_0` and its transpose, and the transfer matrices.
+* the monodromy operator :math:`M = \Gamma_{N-1}\cdots\Gamma_0` and its transpose, and the transfer matrices;
+* :class:`NewtonPicard`: a preconditioner of :meth:`IntervalSweeps.solve`'s GMRES from a leading Floquet
+  subspace.
 
 The factorisations may be SuperLU objects (sparse blocks, :mod:`._sparse`) or dense LU (:class:`DenseLU`, for
 the derivative computations of the dense solver): anything with ``solve(b, trans="N"|"T")``.
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 import jax.numpy as jnp
@@ -262,14 +265,15 @@ class NewtonPicard:
         self.V = V
         self.U = np.block([[-W, G], [PhiV, Psi - np.eye(2)]])
         C = np.block([[np.eye(c) - V.T @ W, V.T @ G], [PhiV, Psi]])
-        self.cond = float(np.linalg.cond(C))
-        self._C = sla.lu_factor(C, check_finite=False)
+        finite = bool(np.all(np.isfinite(C)) and np.all(np.isfinite(self.U)))
+        self.cond = float(np.linalg.cond(C)) if finite else math.inf
+        self._C = sla.lu_factor(C, check_finite=False) if np.isfinite(self.cond) else None
 
     @classmethod
     def build(cls, lin: "IntervalSweeps", V: np.ndarray | None) -> "NewtonPicard | None":
-        """The preconditioner, or None where V does not fit (wrong state count, no columns) or the projected
-        system is numerically singular (then plain GMRES is the safer choice)."""
-        if V is None or V.ndim != 2 or V.shape[0] != lin.n or V.shape[1] == 0:
+        """The preconditioner, or None where V does not fit (wrong state count, no columns, not finite) or the
+        projected system is not finite or numerically singular (then plain GMRES is the safer choice)."""
+        if V is None or V.ndim != 2 or V.shape[0] != lin.n or V.shape[1] == 0 or not np.all(np.isfinite(V)):
             return None
         pc = cls(lin, np.asarray(V, float))
         return pc if np.isfinite(pc.cond) and pc.cond < 1e10 else None

@@ -126,6 +126,7 @@ def test_a_basis_that_does_not_fit_builds_no_preconditioner(ring40):
     assert NewtonPicard.build(lin, None) is None
     assert NewtonPicard.build(lin, V[:-2]) is None  # another state count (a branch of another problem)
     assert NewtonPicard.build(lin, V[:, :0]) is None
+    assert NewtonPicard.build(lin, np.full_like(V, np.nan)) is None  # a failed analysis's basis
 
 
 def test_deflate_must_be_a_bool():
