@@ -135,6 +135,7 @@ class Found:
     tangent_lam: float = math.nan
     singular: bool = False  # not located because the corrections next to its zero failed (see bracket)
     jumped: bool = False  # the solution itself jumps across the closed bracket: two branches (see bracket)
+    sides: tuple | None = None  # bracketed: (critical members before, analysis after) for the crossing's data
     lam_error: float = math.nan  # SpecialPoint.lam_error (the localisation's share until _insert)
     lam: float | None = None  # where it differs from the point's (a branch point placed across its gap)
     tangent: Any = None  # at the point (localised points)
@@ -151,6 +152,17 @@ def localise(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, test
     extra = run.curve.special(kind, found.point, found.analysis, found.located)
     if extra is None:
         return None
+    if found.sides is not None and any(k in extra for k in ("omega", "angle")):
+        # bracketed: the point's data are those of one side, where the pair nearest the boundary need not be the
+        # one that crossed (several pairs as near, a jump of the model); the member that changed side across the
+        # bracket, by matching, gives the frequency or angle
+        before, after = found.sides
+        for k, data in run.curve.crossing_kinds(after, 2, before=before):
+            if k == kind and data:
+                extra = {**extra, **data}
+                if "omega" in data and "period" in extra:  # a Hopf point's period is that of its pair
+                    extra["period"] = 2.0 * math.pi / data["omega"]
+                break
     found.extra = extra
     return found
 
@@ -184,6 +196,8 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
             solved[sv] = (sol, lin)
             return solved[sv]
 
+        tested: dict[float, tuple] = {}  # sv -> (analysis, test values) of the evaluations
+
         def g(sv):
             got = solve_at(sv)
             if got is None:
@@ -191,7 +205,8 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
             sol, lin = got
             a = c.analyse(sol.x, lin, sol.aux)
             tl = float(c.lam(sol.aux))
-            return c.tests(a, tl)[kind], (sol, a, tl)
+            tested[sv] = (a, c.tests(a, tl))
+            return tested[sv][1][kind], (sol, a, tl)
 
         info: dict = {}
         sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol, info=info)
@@ -212,6 +227,10 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
                 found.lam_error = hi - lo
                 found.jumped = _solution_jumps(c, [(0.0, X), (ds, Xn)] + [(k, v[0].x) for k, v in solved.items()],
                                                lo, hi)
+                before = tests if lo == 0.0 else tested.get(lo, (None, {}))[1]
+                after = an_n if hi == ds else tested.get(hi, (None, None))[0]
+                if "CRITICAL" in before and after is not None:
+                    found.sides = (before["CRITICAL"], after)
     # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
     # jump to another branch makes the test function change sign far from zero, with or without failures)
     found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)

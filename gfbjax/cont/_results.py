@@ -90,7 +90,9 @@ class SpecialPoint:
     multipliers (cycles) or eigenvalues of df/dx (equilibria) at the point, as in the branch arrays.
     located: the test function was driven to zero by the localisation solver; residual: its value at the returned
     point.  Not located with a finite residual: the sign change was bracketed to the step tolerance but the test
-    function jumps there (its value is the residual): the location is good, the type-specific data less so.  Not
+    function jumps there (its value is the residual): the location is good; omega (angle) is that of the pair that
+    changed side across the bracket where the eigenvalues (multipliers) on its two sides match confidently, else
+    that of the pair nearest the boundary at the point, and the other data are the point's.  Not
     located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.
     A bracketed BP deserves suspicion: the branch-point test also flips when the corrector jumps from one branch
     to a nearby one (an imperfect bifurcation with a large step), and then the points past it lie on the other
@@ -138,7 +140,8 @@ class SpecialPoint:
     def localisation(self) -> str:
         """How the point was placed, in one word for tables: ``"located"`` (its test function driven to zero),
         ``"bracketed"`` (a sign change pinned down to ``lam_error``, but the test function jumps there: no zero
-        crossing, so the type-specific data are those of one side), or ``"not localised"`` (reported at the
+        crossing, so the type-specific data come from one side, omega or angle from the pair that crossed where it
+        can be matched), or ``"not localised"`` (reported at the
         first point past the event)."""
         if self.located:
             return "located"

@@ -416,3 +416,61 @@ def test_crossing_names_follow_the_members_that_crossed():
     z = np.array([-1e-4 + 3j, -1e-4 - 3j, 0.01 + 1j, 0.01 - 1j])
     got = name_crossings(z, 2, lambda v: abs(v.real), "HOPF", lambda v: "BP", crossed=[3])
     assert got == [("HOPF", 0.01 + 1j)]
+
+
+def _jumping_oscillators(K, d):
+    """K uncoupled oscillators x_k'' - c_k x_k' + (1 + k) x_k = 0 whose damping jumps from -0.1 to +0.1 at
+    lam = 0.3 + k d: the pair k crosses the imaginary axis there with omega_k = sqrt(1 + k - 0.0025), and every
+    pair stays 0.05 from the axis on either side."""
+    def f(x, p, args):
+        out = []
+        for k in range(K):
+            c = jnp.where(p > 0.3 + k * d, 0.1, -0.1)
+            out += [x[2 * k + 1], -(1 + k) * x[2 * k] + c * x[2 * k + 1]]
+        return jnp.stack(out)
+    return f
+
+
+@pytest.mark.parametrize("K, d", [(3, 1e-3), (4, 1e-3), (3, 0.05)])
+def test_a_bracketed_hopf_point_carries_the_frequency_of_the_pair_that_crossed(K, d):
+    """Session 13 (fresh-user review): every bracketed Hopf point of these oscillators reported omega 0.999, the
+    frequency of the first pair (all pairs are equally near the axis, and the point's data were those of one side).
+    The pair that changed side across the bracket, found by matching, now gives each its own omega."""
+    st = EquilibriumSettings(ds=0.004, ds_max=0.004, lam_min=0.0, lam_max=0.6)
+    br = continue_equilibria(EquilibriumProblem(_jumping_oscillators(K, d), 2 * K), st, np.zeros(2 * K), 0.0)
+    hopf = sorted(br.special_of("HOPF"), key=lambda s: s.lam)
+    assert len(hopf) == K
+    for k, s in enumerate(hopf):
+        assert abs(s.lam - (0.3 + k * d)) <= max(s.lam_error, 1e-9)
+        assert s.omega == pytest.approx(np.sqrt(1 + k - 0.0025), rel=1e-10)
+        assert s.period == pytest.approx(2 * np.pi / s.omega, rel=1e-12)
+
+
+def test_a_bracketed_torus_carries_the_angle_of_the_pair_that_crossed():
+    """The same for cycles: a Stuart-Landau cycle of period 2 pi beside two linear oscillators z_k' = (c_k + i w_k)
+    z_k whose growth rate jumps from -0.01 to +0.0105 at lam = 0.3 and 0.31.  Each pair's multipliers are
+    exp((c_k +- i w_k) 2 pi): modulus 0.939 or 1.068, angle 2 pi w_k mod 2 pi (w = 1.3, 2.1: 0.6 pi and 0.2 pi).
+    After the first crossing the pair still inside is the nearer to the circle (0.061 against 0.068), so the
+    point's own data named it, not the pair that crossed.  (Where a multiplier jumps by more than half its
+    distance to the others, no confident match exists, and the point keeps its own data.)"""
+    w = (1.3, 2.1)
+
+    def f(x, p, args):
+        r2 = x[0] ** 2 + x[1] ** 2
+        out = [x[0] - x[1] - x[0] * r2, x[0] + x[1] - x[1] * r2]
+        for k in range(2):
+            c = jnp.where(p > 0.3 + 0.01 * k, 0.0105, -0.01)
+            a, b = x[2 + 2 * k], x[3 + 2 * k]
+            out += [c * a - w[k] * b, w[k] * a + c * b]
+        return jnp.stack(out)
+
+    st = CycleSettings(ds=0.004, ds_max=0.004, lam_min=0.25, lam_max=0.35, N=12, adapt=0)
+    start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]
+                                                   + [0 * t] * 4, -1), 2 * np.pi, 0.25, st)
+    br = continue_cycles(CycleProblem(f, 6), st, start)
+    ns = sorted(br.special_of("NS"), key=lambda s: s.lam)
+    assert len(ns) == 2, [(s.type, s.lam) for s in br.special]
+    for k, s in enumerate(ns):
+        assert abs(s.lam - (0.3 + 0.01 * k)) <= max(s.lam_error, 1e-9)
+        # the angles differ by 1.26; the collocation's own error in them is 1.1e-6 (N = 12)
+        assert s.angle == pytest.approx(2 * np.pi * (w[k] % 1.0), abs=1e-5)
