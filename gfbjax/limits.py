@@ -127,8 +127,9 @@ class Range:
     what: str = ""
 
     def interval(self) -> str:
-        """The range as text, e.g. ``(0, 50]``."""
-        left, right = ("(" if self.lo_open else "["), (")" if self.hi_open else "]")
+        """The range as text, e.g. ``(0, 50]``; an unbounded end is open (``(0, inf)``): values must be finite."""
+        left = "(" if self.lo_open or self.lo is None else "["
+        right = ")" if self.hi_open or self.hi is None else "]"
         lo = "-inf" if self.lo is None else _fmt(self.lo)
         hi = "inf" if self.hi is None else _fmt(self.hi)
         return f"{left}{lo}, {hi}{right}"

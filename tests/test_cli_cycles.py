@@ -127,3 +127,13 @@ def test_equilibria_hopf_cycles_tiny_run(tmp_path, capsys):
 def test_equilibria_bad_hopf_cycles_exits_2(tmp_path, capsys):
     code, _, err = _run(["equilibria", *TINY[:4], "--hopf-cycles", "-3", "--out", str(tmp_path)], capsys)
     assert code == 2 and "--hopf-cycles" in err
+
+
+def test_summary_time_keeps_the_compilation_out_of_the_per_point_figure():
+    from gfbjax.cli.commands.cycles import _time_split
+
+    # 10 s of continuation, the first point after 7 s (compilation), 4 points: 1 s for each later point
+    assert _time_split(10.0, 100.0, 107.0, 4) == " (first point 7.0 s, compilation included; then 1.00 s per point)"
+    assert _time_split(10.0, 100.0, 107.0, 1) == " (10.00 s per point)"
+    assert _time_split(10.0, 100.0, None, 4) == " (2.50 s per point)"
+    assert _time_split(10.0, 100.0, None, 0) == ""

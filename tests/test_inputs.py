@@ -67,6 +67,17 @@ def test_range_message_names_field_value_and_range():
         limits.SPEED.check(50.0000001)
 
 
+def test_an_unbounded_end_is_printed_open():
+    # infinity is refused as a value (it is not finite), so the range must not say it is included
+    half = limits.Range("ds", lo=0.0, lo_open=True)
+    assert half.interval() == "(0, inf)"
+    assert limits.Range("x", hi=1.0).interval() == "(-inf, 1]"
+    with pytest.raises(ParameterError, match=r"^ds = 0 is outside the allowed range \(0, inf\)"):
+        half.check(0.0)
+    with pytest.raises(ParameterError, match=r"ds must be finite, got inf"):
+        half.check(math.inf)
+
+
 @pytest.mark.parametrize("value", [0.3, 1, np.float32(0.3), np.float64(0.3), np.int64(1), jnp.asarray(0.3),
                                    jnp.asarray(0.3, dtype=jnp.float32), np.asarray(0.3)])
 def test_range_accepts_concrete_numbers(value):
@@ -271,6 +282,25 @@ def test_static_cli_grid_too_large(tmp_path, capsys, no_static_solve):
     assert code == 2
     line = _one_error_line(err)
     assert "Nx x Nz = 1024 x 256" in line and "6144" in line
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["--nx", "16", "--set", "Nx=24"], "--nx 16 and --set Nx=24 disagree"),
+    (["--nz", "2", "--set", "Nz=3"], "--nz 2 and --set Nz=3 disagree"),
+])
+def test_grid_given_twice_with_two_values_is_refused(argv, word, tmp_path, capsys, no_static_solve):
+    code, _, err = _run(["static", *argv, "--out", str(tmp_path / "o")], capsys)
+    assert code == 2
+    assert word in _one_error_line(err)
+
+
+def test_grid_given_twice_with_one_value_is_accepted():
+    import argparse
+
+    from gfbjax.cli.commands._common import spec_from_args
+
+    args = argparse.Namespace(system="reference", overrides=["Nx=16"], nx=16, nz=None)
+    assert spec_from_args(args).Nx == 16
 
 
 def test_out_under_a_file_is_refused_before_computing(tmp_path, capsys, no_static_solve):

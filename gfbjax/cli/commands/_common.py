@@ -165,10 +165,13 @@ def spec_from_args(args: argparse.Namespace) -> SystemSpec:
     if getattr(args, "preset", None) is not None:
         spec = spec.with_preset(args.preset)
     changes = parse_set(getattr(args, "overrides", []) or [])
-    if getattr(args, "nx", None) is not None:
-        changes["Nx"] = args.nx
-    if getattr(args, "nz", None) is not None:
-        changes["Nz"] = args.nz
+    for field, option in (("Nx", "nx"), ("Nz", "nz")):
+        value = getattr(args, option, None)
+        if value is None:
+            continue
+        if field in changes and changes[field] != value:  # one would silently win over the other
+            raise ParameterError(f"--{option} {value} and --set {field}={changes[field]} disagree: give the grid once")
+        changes[field] = value
     return spec.replace(**changes) if changes else spec
 
 
