@@ -263,7 +263,11 @@ def test_run_checks_accept_numpy_and_bound_the_history(small_params):
     (["--settle-revs", "-1"], "--settle-revs"),
     (["--start", "60"], "--start"),
     (["--start", "0.5", "--end", "0.5"], "--end"),
-    (["--rtol", "0.5"], "rtol"),
+    (["--rtol", "0.5"], "--rtol = 0.5 is outside"),
+    # the settings' own checks name the option, not the field (was "samples_per_rev = 1 ...")
+    (["--samples-per-rev", "1"], "--samples-per-rev = 1 is outside"),
+    (["--chunk-revs", "0"], "--chunk-revs = 0 is outside"),
+    (["--h-rub", "-1"], "--h-rub = -1 is outside"),
 ])
 def test_runup_cli_refuses_before_computing(argv, word, tmp_path, capsys, no_static_solve):
     t = time.perf_counter()
@@ -282,6 +286,25 @@ def test_static_cli_grid_too_large(tmp_path, capsys, no_static_solve):
     assert code == 2
     line = _one_error_line(err)
     assert "Nx x Nz = 1024 x 256" in line and "6144" in line
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["static", *SMALL, "--curves", "--speeds", "0.2,0.2"], "values must be distinct, 0.2 repeated"),
+    (["static", *SMALL, "--curves", "--alphas", "0.5,1,0.5"], "values must be distinct, 0.5 repeated"),
+    (["static", *SMALL, "--curves", "--speeds", "0.2,,0.4"], "an empty item in '0.2,,0.4'"),
+    (["static", *SMALL, "--out", ""], "--out: expected a folder, got an empty string"),
+    (["coefficients", *SMALL, "--start", "0.3", "--end", "0.3", "--points", "3"],
+     "--end must differ from --start = 0.3 for --points 3"),
+])
+def test_lists_and_folders_that_cannot_be_meant_are_refused(argv, word, tmp_path, capsys, no_static_solve,
+                                                           monkeypatch):
+    monkeypatch.chdir(tmp_path)  # an empty --out must not write into the current folder either
+    if "--out" not in argv:
+        argv = [*argv, "--out", str(tmp_path / "o")]
+    code, _, err = _run(argv, capsys)
+    assert code == 2
+    assert word in _one_error_line(err)
+    assert not any(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("argv, word", [

@@ -359,6 +359,8 @@ def test_cli_sweep_writes_netcdf_plot_and_resumes(tmp_path, capsys):
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "4 designs" in out and "0 reused" in out
+    # every row of the table names its design (a one-field grid lost its values: tested in the next test)
+    assert "alpha_f=0.5 eta=0.05" in out and "alpha_f=1 eta=0.2" in out
     for name in ("sweep.nc", "sweep.png", "sweep.json", "manifest.json"):
         assert (tmp_path / name).is_file(), name
     direct = run_sweep(BASE, GRID, analyses=[Equilibria(0.2, 0.6)], progress=False, compilation_cache=False)
@@ -366,6 +368,19 @@ def test_cli_sweep_writes_netcdf_plot_and_resumes(tmp_path, capsys):
         np.testing.assert_allclose(ds.hopf_omega_bar, direct.hopf_omega_bar, rtol=1e-12)
     assert main(argv) == 0
     assert "4 reused" in capsys.readouterr().out
+
+
+def test_cli_sweep_of_one_field_names_its_designs_and_plots_any_variable_it_offers(tmp_path, capsys):
+    from gfbjax.cli import main
+    from gfbjax.sweep.plot import numeric_variables, plot_variables
+
+    argv = ["sweep", "--nx", "16", "--nz", "2", "--grid", "alpha_f=0.5,1", "--analysis", "equilibria",
+            "--start", "0.2", "--end", "0.6", "--out", str(tmp_path), "--quiet", "--plot", "seconds"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "alpha_f=0.5 " in out and "alpha_f=1 " in out
+    ds = run_sweep(BASE, {"alpha_f": [0.5]}, analyses=[EQ_FAST], progress=False, compilation_cache=False)
+    assert plot_variables([EQ_FAST]) == numeric_variables(ds)
 
 
 @pytest.mark.parametrize("argv, fragment", [
@@ -378,6 +393,10 @@ def test_cli_sweep_writes_netcdf_plot_and_resumes(tmp_path, capsys):
     (["--grid", "eta=0.1", "--workers", "-1"], "--workers = -1 is outside"),
     (["--grid", "eta=0.1", "--speeds", "0.2,70"], "--speeds"),
     ([], "give the designs"),
+    # the figure's variable is drawn after the whole sweep: checked before it
+    (["--grid", "eta=0.1", "--plot", "bogus"], "--plot 'bogus' is not a numeric result of --analysis equilibria"),
+    (["--grid", "eta=0.1", "--analysis", "static", "--plot", "hopf_omega_bar"], "choose one of static_"),
+    (["--grid", "eta=0.1", "--plot", "hopf_omega_bar", "--no-figures"], "with --no-figures there is none"),
 ])
 def test_cli_bad_input_exits_2(argv, fragment, capsys, tmp_path):
     from gfbjax.cli import main

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..plot._common import axes_grid, finish
 
-__all__ = ["DEFAULT_FIGURES", "default_variable", "numeric_variables", "heatmap", "lines", "plot_sweep"]
+__all__ = ["DEFAULT_FIGURES", "default_variable", "numeric_variables", "plot_variables", "heatmap", "lines", "plot_sweep"]
 
 #: The figures :func:`plot_sweep` shows by default, in order of preference (the first one the sweep has).
 DEFAULT_FIGURES = ("cycles_loss_omega_bar", "hopf_omega_bar", "energy_W_cb", "optimum_W_cb", "static_eccentricity",
@@ -26,6 +26,12 @@ def numeric_variables(ds: Any) -> list[str]:
     """The data variables that can be plotted (numbers, not texts), bookkeeping (``seconds``) last."""
     names = [k for k, v in ds.data_vars.items() if np.issubdtype(v.dtype, np.number)]
     return sorted(names, key=lambda k: k == "seconds")
+
+
+def plot_variables(analyses: Sequence[Any]) -> list[str]:
+    """What :func:`numeric_variables` will return for a sweep of ``analyses`` (objects of :mod:`._analyses`),
+    known before any design is computed: their numeric figures, then ``seconds``."""
+    return [f.name for a in analyses for f in a.figures if not f.text] + ["seconds"]
 
 
 def default_variable(ds: Any) -> str:

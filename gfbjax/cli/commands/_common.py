@@ -71,6 +71,14 @@ def _field_doc() -> str:
     return ", ".join(parts)
 
 
+def _folder(text: str) -> Path:
+    """An argparse ``type`` for ``--out``: ``Path("")`` would be the current folder, so an empty string (an unset
+    shell variable, say) is refused instead of writing the results there."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder, got an empty string")
+    return Path(text)
+
+
 def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
     """Add ``--system``, ``--preset``, ``--set``, ``--nx``, ``--nz`` and ``--out`` (default ``results/<command>``)."""
     g = parser.add_argument_group("system", "which rotor-bearing system to analyse (SI inputs; see gfbjax.SystemSpec)")
@@ -97,7 +105,7 @@ def add_system_options(parser: argparse.ArgumentParser, command: str) -> None:
                         f"default {SystemSpec.Nz}, in {limits.NZ.interval()}); the grid's (Nx - 1)(Nz + 1) "
                         "states (about twice as many with axial_domain = \"full\") plus the "
                         f"rotor's must not exceed {limits.MAX_DENSE_UNKNOWNS} (dense Jacobians)")
-    g.add_argument("--out", type=Path, default=Path("results") / command, metavar="DIR",
+    g.add_argument("--out", type=_folder, default=Path("results") / command, metavar="DIR",
                    help="output folder, created if needed and checked to be writable before any computation "
                         "(default: %(default)s)")
 
@@ -202,14 +210,20 @@ def output_dir(args: argparse.Namespace) -> Path:
 
 def float_list(option: str, rng: limits.Range | None = None, *, increasing: bool = False):
     """An argparse ``type`` for comma-separated numbers, each checked against ``rng`` (a
-    :class:`gfbjax.limits.Range`); argparse reports errors with the option's name."""
+    :class:`gfbjax.limits.Range`), none repeated (a repeated speed or load would be computed twice) and none
+    empty (``0.2,,0.4`` is a typo, not two numbers); argparse reports errors with the option's name."""
     def parse(text: str) -> list[float]:
+        items = text.replace(" ", "").split(",")
+        if "" in items:
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got an empty item in {text!r}")
         try:
-            vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+            vals = [float(v) for v in items]
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
-        if not vals:
-            raise argparse.ArgumentTypeError("expected at least one number")
+        repeated = sorted({v for v in vals if vals.count(v) > 1})
+        if repeated:
+            raise argparse.ArgumentTypeError(f"values must be distinct, {', '.join(f'{v:g}' for v in repeated)} "
+                                             f"repeated in {text!r}")
         for v in vals:
             try:
                 check_range(option, v, rng)

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ...params import ParameterError
 from ._common import (add_speed_option, add_system_options, check_option, output_dir, resolve_speeds, spec_from_args,
                       traced_params, write_json)
 
@@ -65,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
     spec = spec_from_args(args)
     resolve_speeds(args, spec, "--start", "--end")
     check_option("--points", args.points, 1, 10**4, what="speeds", integer=True)
+    if args.points > 1 and args.start == args.end:  # the same speed computed --points times
+        raise ParameterError(f"--end must differ from --start = {args.start:g} for --points {args.points} "
+                             "(one speed: --points 1)")
     WHIRL_RATIO.check(args.whirl_ratio, "--whirl-ratio")
     out = output_dir(args)
     params = traced_params(spec)

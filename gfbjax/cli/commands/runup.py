@@ -192,16 +192,18 @@ def _check_run(args: argparse.Namespace, params: Any) -> tuple[Any, float, float
     check_option("--segment-revs", args.segment_revs, 0.0, 1e4, lo_open=True, what="revolutions per STFT segment")
     check_option("--rel", args.rel, 0.0, 1e3, lo_open=True, what="fraction of the 1X amplitude")
     check_option("--floor", args.floor, 0.0, 1e3, what="amplitude over c")
-    settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
-                                 samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs, h_rub=args.h_rub)
     revs = 400.0 if (args.revs is None and args.accel is None) else args.revs
     try:
+        settings = TransientSettings(solver=args.solver, rtol=args.rtol, atol=args.atol,
+                                     samples_per_rev=args.samples_per_rev, chunk_revs=args.chunk_revs,
+                                     h_rub=args.h_rub)
         check_run_up(params, args.start, args.end, accel=args.accel, revolutions=revs, settings=settings)
-    except ParameterError as exc:  # name the option: "accel = 0 ..." -> "--accel = 0 ...", "|accel|" likewise
+    except (ParameterError, ValueError) as exc:  # name the option: "rtol = 0 ..." -> "--rtol = 0 ..."
         msg = str(exc)
-        for name in ("accel", "|accel|"):
+        for name, option in _OPTIONS.items():
             if msg.startswith(f"{name} "):
-                msg = name.replace("accel", "--accel") + msg[len(name):]
+                msg = option + msg[len(name):]
+                break
         raise ParameterError(msg) from None
     if settle_revs > 0:
         check_simulate(params, args.start, revolutions=settle_revs, settings=settings)
@@ -241,6 +243,11 @@ def _cycle_overlay(path: str | None, spec: SystemSpec, system: str = "") -> dict
     return {"speed": b.lam, "stable": b.stable, "x_max": b.xmax[:, 0], "x_min": b.xmin[:, 0],
             "y_max": b.xmax[:, 1], "y_min": b.xmin[:, 1]}
 
+
+#: the names in the messages of the run-up checks and TransientSettings -> the options they come from
+_OPTIONS = {"accel": "--accel", "|accel|": "|--accel|", "rtol": "--rtol", "atol": "--atol",
+            "samples_per_rev": "--samples-per-rev", "chunk_revs": "--chunk-revs", "h_rub": "--h-rub",
+            "solver": "--solver"}
 
 _GRID_FIELDS = ("Nx", "Nz")
 _UNBALANCE_FIELDS = ("G", "e_u", "omega_r", "omega_r_unit")  # compared through the eccentricity they give

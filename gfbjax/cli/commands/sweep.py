@@ -225,7 +225,7 @@ def _table(ds: Any, limit: int = 40) -> str:
     import numpy as np
 
     dims = list(ds["outcome"].dims)
-    flat = ds.stack(_d=dims) if len(dims) > 1 else ds.rename({dims[0]: "_d"}) if dims[0] != "_d" else ds
+    flat = ds.stack(_d=dims)  # also for one dimension: a rename would take the swept field's coordinate with it
     n = flat.sizes["_d"]
     cols = [(v, label) for v, label in _KEY_FIGURES if v in ds.data_vars]
     fields = json.loads(ds.attrs.get("swept_fields", "[]"))
@@ -262,6 +262,15 @@ def run(args: argparse.Namespace) -> int:
     grid = parse_grid(args.grid) if args.grid else None
     designs = read_designs(args.designs) if args.designs is not None else None
     analyses = analyses_from_args(args)
+    if args.plot is not None:  # checked now: the figure is drawn after every design has been computed
+        from ...sweep.plot import plot_variables
+
+        if args.no_figures:
+            raise ParameterError("--plot chooses the variable of sweep.png; with --no-figures there is none")
+        allowed = plot_variables(analyses)
+        if args.plot not in allowed:
+            raise ParameterError(f"--plot {args.plot!r} is not a numeric result of --analysis {args.analysis}; "
+                                 f"choose one of {', '.join(allowed)}")
     check_option("--workers", args.workers, 0, 4096, what="0: serial", integer=True)
     if args.scheduler is not None and args.workers:
         raise ParameterError("--workers starts a local cluster; with --scheduler the cluster's own workers run")
