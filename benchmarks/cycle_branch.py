@@ -10,7 +10,8 @@ iteration a branch would pay without the sparse solver.  It is measured through 
 at the guess and at the new iterate; each evaluation is a linearisation and the solve for step and tangent), as
 the correction's time over its evaluations.
 
-Usage:  python benchmarks/cycle_branch.py [--nx 48 --nz 8] [--start 0.05 --end 1.0] [--no-dense]
+Usage:  python benchmarks/cycle_branch.py [--nx 48 --nz 8] [--start 0.05 --end 1.0] [--dlam-max D] [--chord-tol T]
+        [--no-dense]
 Writes benchmarks/results/cycle_branch.json and prints a table.
 """
 from __future__ import annotations
@@ -27,18 +28,26 @@ import jax
 import numpy as np
 
 from gfbjax import cont
-from gfbjax.analyses.cycles import continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem, linear_response_start
+from gfbjax.analyses.cycles import (CYCLE_DEFAULTS, continue_gfb_cycles, default_cycle_settings, gfb_cycle_problem,
+                                    linear_response_start)
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def add_branch_arguments(ap: argparse.ArgumentParser) -> None:
+    """The reference branch's grid, speed range and point placement (also used by point_placement.py)."""
     ap.add_argument("--nx", type=int, default=48)
     ap.add_argument("--nz", type=int, default=8)
     ap.add_argument("--start", type=float, default=0.05)
     ap.add_argument("--end", type=float, default=1.0)
-    ap.add_argument("--dlam-max", type=float, default=0.02)
+    ap.add_argument("--dlam-max", type=float, default=CYCLE_DEFAULTS["dlam_max"])
+    ap.add_argument("--chord-tol", type=float, default=CYCLE_DEFAULTS["chord_tol"],
+                    help="point placement (inf: steps set by --dlam-max and the arclength steps alone)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    add_branch_arguments(ap)
     ap.add_argument("--m", type=int, default=4, help="collocation points per interval")
     ap.add_argument("--N", type=int, default=16, help="mesh intervals")
     ap.add_argument("--collocation", choices=("gauss", "radau"), default=None,
@@ -50,6 +59,7 @@ def main() -> None:
     params = gfbjax.reference_system(Nx=a.nx, Nz=a.nz).nondim()
     prob = gfb_cycle_problem(params)
     extra = {} if a.collocation is None else {"collocation": a.collocation}
+    extra["chord_tol"] = a.chord_tol
     settings = default_cycle_settings(dlam_max=a.dlam_max, m=a.m, N=a.N, **extra)
 
     t0 = time.perf_counter()
@@ -68,7 +78,8 @@ def main() -> None:
                for s in branch.special]
     rec = {
         "system": "reference", "Nx": a.nx, "Nz": a.nz, "n": prob.n, "N": settings.N, "m": settings.m,
-        "range": [a.start, a.end], "dlam_max": a.dlam_max, "reached": float(branch.lam[-1]),
+        "range": [a.start, a.end], "dlam_max": a.dlam_max,
+        "chord_tol": a.chord_tol if np.isfinite(a.chord_tol) else "inf", "reached": float(branch.lam[-1]),
         "outcome": str(branch.outcome), "message": branch.message,
         "points": len(branch), "newton_iterations": int(np.sum(branch.newton_iterations)),
         "compile_and_first_3_points_s": round(t_compile, 2), "branch_s": round(t_branch, 2),

@@ -24,7 +24,7 @@ def test_cycles_help_lists_options(capsys):
     code, out, _ = _run(["cycles", "--help"], capsys)
     assert code == 0
     for opt in ["--system", "--set", "--nx", "--nz", "--out", "--start", "--end", "--m", "--N", "--ds",
-                "--ds-max", "--dlam-max", "--max-points", "--no-locate", "--no-figures", "--quiet"]:
+                "--ds-max", "--dlam-max", "--chord-tol", "--max-points", "--no-locate", "--no-figures", "--quiet"]:
         assert opt in out, opt
 
 
@@ -45,6 +45,9 @@ def test_equilibria_help_lists_options(capsys):
     (["--ds", "0"], "--ds"),
     (["--ds", "5", "--ds-max", "1"], "--ds-max"),
     (["--dlam-max", "-0.1"], "--dlam-max"),
+    (["--chord-tol", "0"], "--chord-tol"),
+    (["--chord-tol=-0.01"], "--chord-tol"),
+    (["--chord-tol", "nan"], "--chord-tol"),
     (["--max-points", "1"], "--max-points"),
     (["--nx", "4"], "Nx"),
     (["--m", "abc"], "--m"),
@@ -85,6 +88,7 @@ def test_cycles_tiny_run_writes_everything(tmp_path, capsys):
         assert z["multipliers"].shape[0] == lam.size
     summary = json.loads((out / "cycles.json").read_text())
     assert summary["counts"]["points"] == lam.size
+    assert summary["settings"]["chord_tol"] == 0.01 and summary["settings"]["dlam_max"] == 0.05
     assert summary["outcome"] == meta["outcome"] and summary["message"] == meta["message"]
     assert summary["range"]["reached_end"] == (code == 0)
     assert set(summary["timings_s"]) >= {"continuation", "total"}

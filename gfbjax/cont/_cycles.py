@@ -417,6 +417,10 @@ class CycleCurve(Curve):
                            an["stable"], an["trivial_error"], int(iterations), float(ds), float(tangent_lam), state,
                            an.get("monitor", float("nan")), mesh_error, stiff, mu_error)
 
+    def plotted(self, X):
+        _, xmax, xmin = _norm_and_extrema(X, self.scheme, self._comps)
+        return np.concatenate([[float(X.lam)], np.asarray(xmax), np.asarray(xmin)])
+
     def state(self, X):
         return _orbit_state(X)
 

@@ -25,7 +25,8 @@ One step from a converged point :math:`X_k` with unit tangent :math:`\tau_k`:
    a test function) refine the step the same way; those left after the last halving (events closer than the shortest
    step) are reported as not located, named from the eigenvalues nearest the boundary
    (:meth:`Curve.crossing_kinds`);
-5. record, call the callback; grow ds after a fast correction.
+5. record, call the callback; grow ds after a fast correction, and with ``chord_tol`` bound it by the curvature of
+   the recorded curve (:func:`_chord_factor`): points gather where the branch bends.
 
 A step that reaches or crosses ``lam_min``/``lam_max`` is replaced by a correction at lam = the bound (from the
 secant): the last point lies on the bound, and no point or event beyond it is recorded (``REACHED_END``).
@@ -104,6 +105,11 @@ class Curve(abc.ABC):
     @abc.abstractmethod
     def record(self, X: Any, analysis: dict[str, Any], iterations: int, ds: float, tangent_lam: float
                ) -> PointRecord: ...
+
+    @abc.abstractmethod
+    def plotted(self, X: Any) -> np.ndarray:
+        """What a plot of the branch shows of X, as :func:`_plotted` reads it from X's record (lam, then the
+        recorded components' maxima and minima), without the record's analyses."""
 
     @abc.abstractmethod
     def state(self, X: Any) -> dict[str, np.ndarray]: ...
@@ -293,10 +299,16 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         X, tau, tests = X0, tau0, None
     refined = 0  # halvings for an event that could not be located, counted until the event is passed
     ds_unrefined = ds  # the step before those halvings
+    dlam_start = min(s.dlam_max, _chord_dlam(s))
+    # rows of the last two steps' end points (the start counts when it was recorded), for chord_tol
+    ends = [len(run.points) - 1] if run.points else []
     if restored is not None and restored.driver:
         refined, ds_unrefined = int(restored.driver["refined"]), float(restored.driver["ds_unrefined"])
+        ends = [int(restored.driver[k]) for k in ("end0", "end1") if restored.driver.get(k, -1) >= 0]
     while len(run.points) < s.max_points:
-        pred, con, ds, direction = algo.predict(c, X, X_prev, tau, ds, s.direction, s.dlam_max)
+        # until the chord test has its three points it knows no curvature: the first steps are capped instead
+        pred, con, ds, direction = algo.predict(c, X, X_prev, tau, ds, s.direction,
+                                                s.dlam_max if len(ends) == 2 else dlam_start)
         sol, lin = c.correct(pred, con)
         if not sol.converged:
             ds *= 0.5
@@ -310,6 +322,16 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
             ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
             continue
+        chord = None  # the chord test's factor on this step (chord_tol)
+        if math.isfinite(s.chord_tol) and len(ends) == 2:
+            rows = [_plotted(run.points[i]) for i in ends] + [c.plotted(Xn)]
+            chord = _chord_factor(rows, [_plotted(r) for r in run.points], s.chord_tol)
+            if chord < CHORD_RETRY and 0.5 * ds >= s.ds_min:
+                # the step overshot a bend (its chord misses the curve by more than 2 chord_tol): retry shorter,
+                # as the last points' curvature, which set this step, did not announce it
+                ds = max(chord, 0.25, s.ds_min / ds) * ds
+                continue
+        ds_taken = ds
         bound = _crossed_bound(s, c.lam(X), c.lam(Xn))
         if bound is not None and abs(c.lam(X) - bound) <= 1e-12 * max(1.0, abs(bound)):
             # already on it (a branch resumed after its last point, or a step that landed on it to rounding)
@@ -373,9 +395,13 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         rec = c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
         X, tau, X_prev, tests = c.adapt(X, tau, X_prev, tests, len(run.points) + 1)
-        if int(sol.iterations) <= s.fast_iter:
-            ds = min(ds * s.grow, s.ds_max)
-        if not run.accept(rec, X, X_prev, tau, tests, ds, {"refined": refined, "ds_unrefined": ds_unrefined}):
+        ds = min(ds * s.grow, s.ds_max) if int(sol.iterations) <= s.fast_iter else ds
+        if chord is not None:
+            ds = min(ds, max(0.5, chord) * ds_taken)
+        ends = (ends + [len(run.points)])[-2:]  # rec's row once accepted
+        state = {"refined": refined, "ds_unrefined": ds_unrefined,
+                 **{f"end{i}": float(row) for i, row in enumerate(ends)}}
+        if not run.accept(rec, X, X_prev, tau, tests, ds, state):
             return Outcome.STOPPED, "stopped by the callback"
         if bound is not None:
             return Outcome.REACHED_END, f"lam = {bound:.6g} reached (bounds [lam_min, lam_max] = [{s.lam_min:g}, " \
@@ -439,6 +465,57 @@ def _unresolved(run: _Run, missing: int, X: Any, Xn: Any, an_n: dict, before: np
 def _violates(c: Curve, tests: dict) -> bool:
     """A stopping monitor at or below its minimum."""
     return c.monitor is not None and c.monitor.stop and not tests["MONITOR"] > 0.0
+
+
+#: Relative floor of the scale of a plotted quantity in :func:`_chord_factor`: until a quantity has varied by a
+#: tenth of its size, its scale is that tenth, so that the first points of a branch (whose range so far is small)
+#: are not resolved as if that small range filled the plot, nor is the noise of the discretisation.
+CHORD_FLOOR = 0.1
+#: A step whose chord factor is below this is retried (its chord misses the curve by more than 1 / CHORD_RETRY^2
+#: = 2 chord_tol): the curvature that set the step came from the points before it.
+CHORD_RETRY = 1.0 / math.sqrt(2.0)
+
+
+def _plotted(rec: PointRecord) -> np.ndarray:
+    """What a plot of the branch shows of one recorded point: lam, the recorded components' maxima and minima."""
+    return np.concatenate([[rec.lam], np.ravel(rec.xmax), np.ravel(rec.xmin)])
+
+
+def _chord_dlam(s: Any) -> float:
+    """The largest change of lam in a step taken before the chord test has three points, under ``chord_tol`` with
+    finite bounds: sqrt(chord_tol) of the range [lam_min, lam_max], the step whose chord misses a parabola that
+    spans the plot (y = 4 x (1 - x) in the scaled plane, curvature 8) by chord_tol.  Without it the first steps
+    would follow ds and dlam_max alone, and a short range could be crossed in one step; inf otherwise."""
+    if not (math.isfinite(s.chord_tol) and math.isfinite(s.lam_min) and math.isfinite(s.lam_max)):
+        return math.inf
+    return math.sqrt(s.chord_tol) * (s.lam_max - s.lam_min)
+
+
+def _chord_factor(last3: list[np.ndarray], rows: list[np.ndarray], tol: float) -> float:
+    """Factor on the step just taken that resolves the branch to ``tol`` (``chord_tol``): straight lines between
+    recorded points stay within ``tol`` of the curve.  ``last3``: :func:`_plotted` of the last three step end
+    points (the new one last), ``rows``: of every row so far.
+
+    Each plotted quantity is scaled by its range over the rows so far (as a plot's axes are; at least
+    :data:`CHORD_FLOOR` of its size).  In that space the middle of the three points lies d from the chord of the
+    outer two, and d = kappa h1 h2 / 2 for a curvature kappa and chords h1, h2.  A chord of length h misses the
+    curve by at most kappa h^2 / 8, so a chord may be h = sqrt(8 tol / kappa) long: the factor is that over h2
+    (inf on a straight line).
+    """
+    Y = np.array(rows + [last3[-1]])
+    scale = np.maximum(np.ptp(Y, axis=0), CHORD_FLOOR * np.max(np.abs(Y), axis=0))
+    scale[scale == 0.0] = 1.0
+    q0, q1, q2 = (q / scale for q in last3)
+    h1, h2 = float(np.linalg.norm(q1 - q0)), float(np.linalg.norm(q2 - q1))
+    chord = q2 - q0
+    span = float(np.linalg.norm(chord))
+    if not (h1 > 0.0 and h2 > 0.0 and span > 0.0):
+        return math.inf
+    a = q1 - q0
+    d = float(np.linalg.norm(a - (a @ chord) / span**2 * chord))
+    if not d > 0.0:
+        return math.inf
+    return math.sqrt(4.0 * tol * h1 / (d * h2))
 
 
 def _angle(c: Curve, a: Any, b: Any) -> float:

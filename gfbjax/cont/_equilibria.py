@@ -206,6 +206,10 @@ class EquilibriumCurve(Curve):
                            an["spectrum"], an["stable"], float("nan"), int(iterations), float(ds), float(tangent_lam),
                            {"x": x.copy()}, an.get("monitor", float("nan")))
 
+    def plotted(self, y):
+        x = np.asarray(y[:-1])[self.components]
+        return np.concatenate([[float(y[-1])], x, x])
+
     def state(self, y):
         return {"x": np.asarray(y[:-1]).copy(), "lam": np.asarray(y[-1])}
 

@@ -102,6 +102,7 @@ class _StepSettings:
     locate: bool = True
     max_angle: float = math.pi / 4
     event_refine: int = 6
+    chord_tol: float = math.inf
 
     def _check_steps(self) -> None:
         put = functools.partial(store_range, self)
@@ -124,6 +125,7 @@ class _StepSettings:
         put("locate_tol", 0.0, 1.0, lo_open=True)
         put("max_angle", 0.0, math.pi, lo_open=True)
         put("event_refine", 0, 60, integer=True)
+        put("chord_tol", 0.0, inf, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,13 @@ class CycleSettings(_StepSettings):
     Steps: ``ds`` first arclength step (> 0), ``ds_min`` <= ds (the branch ends with ``STEP_TOO_SMALL`` when a
     failed correction halves the step below it), ``ds_max`` >= ds; after a correction in at most ``fast_iter``
     Newton iterations the step grows by ``grow`` in [1, 10]; ``dlam_max`` caps the predicted change of lam per
-    step (the arclength metric can be dominated by T or by many states; inf = no cap).
+    step (the arclength metric can be dominated by T or by many states; inf = no cap).  ``chord_tol`` > 0 places
+    the points where the branch bends: straight lines between recorded points (in the plane of lam and each
+    recorded component's max and min, each scaled by its range over the branch so far) stay within about
+    ``chord_tol`` of the branch; the next step shrinks (at most by half) or may grow to that from the curvature of
+    the last three points, a step that misses by more than twice that is retried shorter, and with finite bounds
+    the first two steps' change of lam is capped at sqrt(chord_tol) (lam_max - lam_min) (inf, the default: no such
+    limit; ``_driver._chord_factor``, ``_driver._chord_dlam``).
     ``direction``: +1/-1, the initial orientation in lam.  Bounds: ``max_points`` recorded points; the branch ends
     (``REACHED_END``) when lam leaves [``lam_min``, ``lam_max``].
     Guarded steps: a step whose tangent turns by more than ``max_angle`` [rad] from the last one is rejected and
@@ -228,7 +236,7 @@ class EquilibriumSettings(_StepSettings):
     """Settings of the continuation of equilibria.
 
     Steps and bounds as in :class:`CycleSettings` (``ds``, ``ds_min``, ``ds_max``, ``direction``, ``max_points``,
-    ``lam_min``, ``lam_max``, ``dlam_max``, ``fast_iter``, ``grow``, ``algorithm``, ``max_angle``,
+    ``lam_min``, ``lam_max``, ``dlam_max``, ``chord_tol``, ``fast_iter``, ``grow``, ``algorithm``, ``max_angle``,
     ``event_refine``).
     Corrector: ``newton_tol`` (a step is small when |dy| <= tol (1 + max|y|); the residual is then accepted below
     max(1e3 tol, 1e-9)), ``newton_max_iter``.

@@ -21,6 +21,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 
 from .. import limits
+from ..analyses.cycles import CYCLE_DEFAULTS
 from ..limits import NoSolutionError, ParameterError
 from ..params import SystemSpec
 
@@ -270,12 +271,13 @@ class Cycles(Analysis):
 
     start: float = 0.05
     end: float = 1.0
-    m: int = 4
-    N: int = 16
-    ds: float = 10.0
-    ds_max: float = 20.0
-    dlam_max: float = 0.02
-    max_points: int = 200
+    m: int = CYCLE_DEFAULTS["m"]
+    N: int = CYCLE_DEFAULTS["N"]
+    ds: float = CYCLE_DEFAULTS["ds"]
+    ds_max: float = CYCLE_DEFAULTS["ds_max"]
+    dlam_max: float = CYCLE_DEFAULTS["dlam_max"]
+    chord_tol: float = CYCLE_DEFAULTS["chord_tol"]
+    max_points: int = CYCLE_DEFAULTS["max_points"]
     locate: bool = True
 
     name: ClassVar[str] = "cycles"
@@ -307,7 +309,8 @@ class Cycles(Analysis):
         limits.MESH_N.check(self.N, "cycles.N")
         try:
             return default_cycle_settings(m=self.m, N=self.N, ds=self.ds, ds_min=min(1e-4, self.ds),
-                                          ds_max=self.ds_max, dlam_max=self.dlam_max, max_points=self.max_points,
+                                          ds_max=self.ds_max, dlam_max=self.dlam_max, chord_tol=self.chord_tol,
+                                          max_points=self.max_points,
                                           locate=self.locate)
         except ValueError as exc:
             raise _settings_error("cycles", exc) from None

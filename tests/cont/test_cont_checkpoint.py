@@ -149,3 +149,19 @@ def test_resume_keeps_the_event_refinement_count(tmp_path, k):
     assert first.outcome is Outcome.INTERRUPTED
     resumed = continue_equilibria(prob, st, np.zeros(4), 0.05, checkpoint=tmp_path / "ck")
     _same(resumed, whole, 1e-12)
+
+
+@pytest.mark.parametrize("k", [3, 6, 11])
+def test_resume_keeps_the_chord_test_history(tmp_path, k):
+    """With ``chord_tol`` the next step depends on the last three step end points; they are rows of the branch,
+    named in the checkpoint, so that a resumed branch takes the same steps (every one checked, ds included)."""
+    from test_cont_steps import step_curve, K
+
+    st = EquilibriumSettings(ds=0.01, ds_max=0.5, lam_min=-1.0, lam_max=1.0, chord_tol=1e-3)
+    prob = EquilibriumProblem(step_curve, 1)
+    whole = continue_equilibria(prob, st, np.array([np.tanh(-K)]), -1.0)
+    first = continue_equilibria(prob, st, np.array([np.tanh(-K)]), -1.0, checkpoint=tmp_path / "ck",
+                                callback=_interrupt_at(k))
+    assert first.outcome is Outcome.INTERRUPTED
+    resumed = continue_equilibria(prob, st, np.array([np.tanh(-K)]), -1.0, checkpoint=tmp_path / "ck")
+    _same(resumed, whole, 1e-12)

@@ -94,3 +94,75 @@ def test_quadratic_predictor_moves_only_the_guess():
     np.testing.assert_allclose(quad.states["x"], lin.states["x"], atol=1e-10)
     np.testing.assert_allclose(quad.states["x"][:, 0] ** 2 + quad.lam ** 2, 1.0, atol=1e-10)
     assert np.sum(quad.newton_iterations[2:]) < np.sum(lin.newton_iterations[2:])
+
+
+K = 8.0  # the steepness of the step curve below
+
+
+def step_curve(x, lam, args):
+    """x' = tanh(K lam) - x: equilibria x = tanh(K lam), flat for |lam| > 0.4 and bending sharply at lam ~ +-0.15."""
+    return jnp.array([jnp.tanh(K * lam) - x[0]])
+
+
+def _largest_gap(br):
+    """The largest distance between the exact curve and the straight lines through the recorded points, in the
+    plane of (lam, x) each scaled by its range over the branch (computed from tanh, not from the continuation)."""
+    lam, x = br.lam, br.states["x"][:, 0]
+    np.testing.assert_allclose(x, np.tanh(K * lam), atol=1e-9)
+    s_lam, s_x = np.ptp(lam), np.ptp(x)
+    gap = 0.0
+    for a, b in zip(range(len(lam) - 1), range(1, len(lam))):
+        t = np.linspace(lam[a], lam[b], 400)
+        P = np.stack([t / s_lam, np.tanh(K * t) / s_x], axis=1)
+        p0, p1 = np.array([lam[a] / s_lam, x[a] / s_x]), np.array([lam[b] / s_lam, x[b] / s_x])
+        u = (p1 - p0) / np.linalg.norm(p1 - p0)
+        rel = P - p0
+        gap = max(gap, float(np.max(np.abs(rel[:, 0] * u[1] - rel[:, 1] * u[0]))))
+    return gap
+
+
+def _step_branch(**kw):
+    st = EquilibriumSettings(**{"ds": 0.01, "ds_max": 0.5, "lam_min": -1.0, "lam_max": 1.0, "max_points": 500,
+                                **kw})
+    br = continue_equilibria(EquilibriumProblem(step_curve, 1), st, np.array([np.tanh(-K)]), -1.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    return br
+
+
+@pytest.mark.parametrize("tol", [1e-2, 1e-3, 1e-4])
+def test_chord_tol_resolves_the_plotted_curve(tol):
+    """``chord_tol``: straight lines between the recorded points stay within tol of the branch (scaled by the
+    ranges, as a plot is), with points gathered at the bends: fewer than a constant step that would resolve the
+    bends as well (the smallest step the branch took)."""
+    br = _step_branch(chord_tol=tol)
+    assert _largest_gap(br) <= 2.0 * tol
+    steps = np.hypot(np.diff(br.lam), np.diff(br.states["x"][:, 0]))
+    assert len(br) < 0.5 * np.sum(steps) / np.min(steps[2:])
+
+
+def test_without_chord_tol_the_steps_miss_the_bends():
+    """The same branch with the Newton-based step growth alone (chord_tol = inf, the engine's default): its
+    points miss the bends by more than twice what chord_tol = 1e-3 allows."""
+    assert _largest_gap(_step_branch()) > 4e-3
+
+
+def test_bad_chord_tol_is_refused():
+    for bad in (0.0, -1e-3, float("nan")):
+        with pytest.raises(ValueError, match=r"chord_tol must be a number in \(0.0, inf\]"):
+            EquilibriumSettings(chord_tol=bad)
+
+
+def test_chord_tol_caps_the_first_steps_by_the_range():
+    """Before the chord test has three points it knows no curvature: the first steps' predicted change of lam is
+    capped at sqrt(chord_tol) of [lam_min, lam_max] (as dlam_max caps it; the correction may move lam a little
+    further).  Found in session 15: a GFB branch over 0.36-0.42 was crossed in one step of dlam_max = 0.1, its NS
+    reported at the end.  Without chord_tol the same settings take one step."""
+    st = dict(ds=1.0, ds_max=1.0, lam_min=-0.05, lam_max=0.05, max_points=100)
+    prob = EquilibriumProblem(step_curve, 1)
+    x0 = np.array([np.tanh(-0.05 * K)])
+    assert len(continue_equilibria(prob, EquilibriumSettings(**st), x0, -0.05)) == 2
+    br = continue_equilibria(prob, EquilibriumSettings(**st, chord_tol=1e-2), x0, -0.05)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert np.all(np.abs(np.diff(br.lam[:3])) <= 1.5 * 0.1 * 0.1)
+    assert len(br) >= 6
+    assert _largest_gap(br) <= 2e-2

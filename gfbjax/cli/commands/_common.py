@@ -282,6 +282,41 @@ def write_summary(out: Path, name: str, data: dict) -> Path:
     return path
 
 
+def add_step_options(group: Any, *, arclength: bool = True) -> None:
+    """The cycle branch's discretisation and step options, with the defaults of ``analyses.cycles.CYCLE_DEFAULTS``
+    (the ``sweep`` command leaves out the arclength steps: ``arclength=False``)."""
+    from ...analyses.cycles import CYCLE_DEFAULTS as D
+
+    group.add_argument("--m", type=int, default=D["m"], metavar="M",
+                       help=f"collocation points per mesh interval, in {limits.COLLOCATION_M.interval()} "
+                            f"(default {D['m']})")
+    group.add_argument("--N", type=int, default=D["N"], metavar="N",
+                       help=f"collocation mesh intervals, in {limits.MESH_N.interval()} (default {D['N']})")
+    if arclength:
+        group.add_argument("--ds", type=float, default=D["ds"], help=f"initial arclength step (default {D['ds']:g}; "
+                           "the first speed step is also capped by --dlam-max)")
+        group.add_argument("--ds-max", type=float, default=D["ds_max"],
+                           help=f"largest arclength step (default {D['ds_max']:g})")
+    group.add_argument("--dlam-max", type=float, default=D["dlam_max"], metavar="DLAM",
+                       help=f"largest change of Omega_bar in one step (default {D['dlam_max']:g})")
+    group.add_argument("--chord-tol", type=float, default=D["chord_tol"], metavar="TOL",
+                       help="straight lines between the points stay within TOL of the plotted curves, each scaled "
+                            f"by its range: points gather where the branch bends (default {D['chord_tol']:g}; "
+                            "inf: steps set by the step options alone)")
+    group.add_argument("--max-points", type=int, default=D["max_points"], metavar="P",
+                       help=f"most points on the branch (default {D['max_points']})")
+
+
+def check_chord_tol(value: float) -> float:
+    """--chord-tol: a number > 0, inf allowed (no chord limit); ParameterError naming the option otherwise."""
+    if value == math.inf:
+        return value
+    if not (isinstance(value, float) and math.isfinite(value) and value > 0.0):
+        raise ParameterError(f"--chord-tol = {value!r} is outside the allowed range: a number > 0, or inf (no chord "
+                             "limit)")
+    return value
+
+
 def check_continuation_options(args: argparse.Namespace) -> None:
     """Checks shared by the continuation commands: speed range --start/--end, steps --ds/--ds-max, --max-points."""
     check_range("--start", args.start, limits.SPEED)

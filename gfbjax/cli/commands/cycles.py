@@ -14,8 +14,8 @@ from ... import limits
 from ...params import ParameterError
 from ._checkpoints import add_checkpoint_options, interrupted_status, prepare_run
 from ._contact import accuracy_line, accuracy_summary, add_contact_options, contact_line, contact_summary
-from ._common import (add_speed_option, add_system_options, branch_row_um, check_continuation_options, check_option,
-                      check_range, speed_si, write_summary)
+from ._common import (add_speed_option, add_step_options, add_system_options, branch_row_um, check_chord_tol,
+                      check_continuation_options, check_option, check_range, speed_si, write_summary)
 
 NAME = "cycles"
 
@@ -38,7 +38,8 @@ invalid input.
 EPILOG = """\
 units: speeds are dimensionless, Omega_bar = Omega t* (the bearing number); displacements over the clearance c.
 The arclength metric contains the period T = 2 pi / Omega_bar, so steps --ds are large; --dlam-max caps the speed
-change per step.
+change per step.  Points are placed where the branch bends: straight lines between them stay within --chord-tol of
+the plotted curves (each scaled by its range); --chord-tol inf gives steps set by --ds-max and --dlam-max alone.
 
 examples:
   gfbjax cycles                                   reference system, Omega_bar 0.05 -> 1.0
@@ -48,7 +49,8 @@ examples:
 
 # option -> CycleSettings field
 _FIELDS = {"m": "--m", "N": "--N", "ds": "--ds", "ds_max": "--ds-max", "dlam_max": "--dlam-max",
-           "max_points": "--max-points", "ds_min": "--ds", "lam_min": "--start", "lam_max": "--end"}
+           "chord_tol": "--chord-tol", "max_points": "--max-points", "ds_min": "--ds", "lam_min": "--start",
+           "lam_max": "--end"}
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -60,17 +62,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
     add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
     n = p.add_argument_group("numerics")
-    n.add_argument("--m", type=int, default=4, metavar="M",
-                   help=f"collocation points per mesh interval, in {limits.COLLOCATION_M.interval()} (default 4)")
-    n.add_argument("--N", type=int, default=16, metavar="N",
-                   help=f"collocation mesh intervals, in {limits.MESH_N.interval()} (default 16)")
-    n.add_argument("--ds", type=float, default=10.0, help="initial arclength step (default 10; the first speed "
-                   "step is also capped by --dlam-max)")
-    n.add_argument("--ds-max", type=float, default=20.0, help="largest arclength step (default 20)")
-    n.add_argument("--dlam-max", type=float, default=0.02, metavar="DLAM",
-                   help="largest change of Omega_bar in one step (default 0.02)")
-    n.add_argument("--max-points", type=int, default=200, metavar="P",
-                   help="most points on the branch (default 200)")
+    add_step_options(n)
     n.add_argument("--collocation", choices=("gauss", "radau"), default="gauss",
                    help="collocation points: gauss (default; order 2m, as AUTO and the paper) or radau "
                         "(L-stable: the film's fast modes get multipliers near 0 instead of spurious ones near the "
@@ -93,9 +85,11 @@ def _settings(args: argparse.Namespace):
     check_range("--m", args.m, limits.COLLOCATION_M)
     check_range("--N", args.N, limits.MESH_N)
     check_option("--dlam-max", args.dlam_max, 0.0, None, lo_open=True, what="speed change per step")
+    check_chord_tol(args.chord_tol)
     try:
         return default_cycle_settings(m=args.m, N=args.N, ds=args.ds, ds_min=min(1e-4, args.ds),
-                                      ds_max=args.ds_max, dlam_max=args.dlam_max, max_points=args.max_points,
+                                      ds_max=args.ds_max, dlam_max=args.dlam_max, chord_tol=args.chord_tol,
+                                      max_points=args.max_points,
                                       locate=not args.no_locate, save_states=True,
                                       collocation=args.collocation)
     except ValueError as exc:
@@ -311,7 +305,8 @@ def run(args: argparse.Namespace) -> int:
         "range": {"start": args.start, "end": args.end, "reached_end": ok,
                   "start_rpm": spec.rpm(args.start), "end_rpm": spec.rpm(args.end)},
         "settings": {"m": settings.m, "N": settings.N, "ds": settings.ds, "ds_max": settings.ds_max,
-                     "dlam_max": settings.dlam_max, "max_points": settings.max_points, "locate": settings.locate,
+                     "dlam_max": settings.dlam_max, "chord_tol": settings.chord_tol, "max_points": settings.max_points,
+                     "locate": settings.locate,
                      "collocation": settings.collocation},
         "outcome": str(branch.outcome), "message": branch.message,
         "counts": {"points": len(branch), "stable": n_stable, "unstable": len(branch) - n_stable,

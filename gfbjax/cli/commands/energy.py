@@ -195,8 +195,8 @@ def run(args: argparse.Namespace) -> int:
         "range": {"start": args.start, "end": args.end, "reached_end": ok},
         "system": {"name": args.system, "spec": spec.to_dict(), "t_star_s": spec.t_star},
         "settings": ({"branch_file": str(args.branch)} if settings is None else
-                     {k: getattr(settings, k) for k in ("m", "N", "ds", "ds_max", "dlam_max", "max_points", "locate",
-                                                        "save_states")}),
+                     {k: getattr(settings, k) for k in ("m", "N", "ds", "ds_max", "dlam_max", "chord_tol", "max_points",
+                                                        "locate", "save_states")}),
         "units": {"speed": "Omega_bar", "work": "p0 R L c per cycle", "rpm": "rev/min", "W_*_J": "J per cycle",
                   "work_unit_J": work_unit_J(spec)},
         "points": [{"Omega_bar": float(lam[i]), "rpm": spec.rpm(float(lam[i])), "stable": bool(stable[i]),

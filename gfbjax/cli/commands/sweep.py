@@ -13,8 +13,8 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError
-from ._common import (_convert, add_system_options, check_option, check_range, float_list, output_dir,
-                      spec_from_args, write_summary)
+from ._common import (_convert, add_step_options, add_system_options, check_chord_tol, check_option, check_range,
+                      float_list, output_dir, spec_from_args, write_summary)
 
 NAME = "sweep"
 
@@ -71,14 +71,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                    help="speeds (Omega_bar) of the static, energy and optimum analyses (default 0.3)")
     a.add_argument("--w", type=float, default=0.0, help="extra specific load W/(p0 L D) of the static analysis "
                                                         "(default 0)")
-    a.add_argument("--m", type=int, default=4, help="collocation points per interval, cycles/energy/optimum "
-                                                    "(default 4)")
-    a.add_argument("--N", type=int, default=16, help="collocation mesh intervals, cycles/energy/optimum "
-                                                     "(default 16)")
-    a.add_argument("--max-points", type=int, default=200, metavar="P",
-                   help="most points on each branch (default 200)")
-    a.add_argument("--dlam-max", type=float, default=0.02, metavar="DLAM",
-                   help="largest change of Omega_bar in one cycle step (default 0.02)")
+    add_step_options(a, arclength=False)
     a.add_argument("--hopf-criticality", type=int, default=0, metavar="P",
                    help="continue P self-excited cycles from each located Hopf point to tell sub- from "
                         "supercritical (default 0: off; costly)")
@@ -189,6 +182,7 @@ def analyses_from_args(args: argparse.Namespace) -> list[Any]:
     check_range("--N", args.N, limits.MESH_N)
     check_option("--max-points", args.max_points, 2, 10**6, what="points", integer=True)
     check_option("--dlam-max", args.dlam_max, 0.0, None, lo_open=True, what="speed change per step")
+    check_chord_tol(args.chord_tol)
     check_option("--hopf-criticality", args.hopf_criticality, 0, 10**5, what="points", integer=True)
     check_option("--max-iter", args.max_iter, 1, 10**4, what="iterations", integer=True)
     check_range("--w", args.w, limits.LOAD_W)
@@ -207,7 +201,7 @@ def analyses_from_args(args: argparse.Namespace) -> list[Any]:
                                             criticality_points=args.hopf_criticality, hopf_N=args.N,
                                             hopf_m=args.m),
         "cycles": lambda: sw.Cycles(start=args.start, end=args.end, m=args.m, N=args.N, dlam_max=args.dlam_max,
-                                    max_points=args.max_points),
+                                    chord_tol=args.chord_tol, max_points=args.max_points),
         "energy": lambda: sw.Energy(speeds=speeds, m=args.m, N=args.N),
         "optimum": lambda: sw.Optimum(speeds=speeds, objective=args.objective, method=args.method,
                                       max_iter=args.max_iter, m=args.m, N=args.N),
