@@ -48,6 +48,7 @@ def test_equilibria_help_lists_options(capsys):
     (["--chord-tol", "0"], "--chord-tol"),
     (["--chord-tol=-0.01"], "--chord-tol"),
     (["--chord-tol", "nan"], "--chord-tol"),
+    (["--chord-tol", "1e-9"], "--chord-tol"),
     (["--max-points", "1"], "--max-points"),
     (["--nx", "4"], "Nx"),
     (["--m", "abc"], "--m"),

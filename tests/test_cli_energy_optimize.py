@@ -151,6 +151,10 @@ def test_energy_tiny_run(tmp_path, capsys):
     # a system option with --branch is refused: the system comes from the file
     code, _, err = _run(["energy", "--branch", str(out / "branch.npz"), "--nx", "24", "--out", str(again)], capsys)
     assert code == 2 and "--nx" in err
+    # so are the step options: the branch's points are the file's (review of session 15: they were ignored)
+    code, _, err = _run(["energy", "--branch", str(out / "branch.npz"), "--chord-tol", "0.5", "--dlam-max", "0.3",
+                         "--out", str(again)], capsys)
+    assert code == 2 and "--chord-tol" in err and "--dlam-max" in err
 
 
 def test_optimize_one_speed(tmp_path, capsys):

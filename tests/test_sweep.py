@@ -191,7 +191,7 @@ def test_bad_analysis_settings_raise_on_construction():
         Equilibria(0.3, 0.3)
     with pytest.raises(ParameterError, match=r"cycles.m = 9 is outside the allowed range \[2, 7\]"):
         Cycles(m=9)
-    with pytest.raises(ParameterError, match=r"cycles: chord_tol must be a number in \(0.0, inf\]"):
+    with pytest.raises(ParameterError, match=r"cycles: chord_tol must be a number in \[1e-06, inf\]"):
         Cycles(chord_tol=0.0)
     with pytest.raises(ParameterError, match=r"optimum.objective = 'W_cf' is not one of"):
         Optimum(objective="W_cf")

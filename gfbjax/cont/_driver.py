@@ -396,8 +396,8 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
         X, tau, X_prev, tests = c.adapt(X, tau, X_prev, tests, len(run.points) + 1)
         ds = min(ds * s.grow, s.ds_max) if int(sol.iterations) <= s.fast_iter else ds
-        if chord is not None:
-            ds = min(ds, max(0.5, chord) * ds_taken)
+        if chord is not None:  # never below ds_min: a bend the step cannot resolve further is passed at ds_min
+            ds = max(min(ds, max(0.5, chord) * ds_taken), s.ds_min)
         ends = (ends + [len(run.points)])[-2:]  # rec's row once accepted
         state = {"refined": refined, "ds_unrefined": ds_unrefined,
                  **{f"end{i}": float(row) for i, row in enumerate(ends)}}
@@ -482,8 +482,8 @@ def _plotted(rec: PointRecord) -> np.ndarray:
 
 
 def _chord_dlam(s: Any) -> float:
-    """The largest change of lam in a step taken before the chord test has three points, under ``chord_tol`` with
-    finite bounds: sqrt(chord_tol) of the range [lam_min, lam_max], the step whose chord misses a parabola that
+    """The largest change of lam in a step taken before the chord test has three points (the first step after a
+    recorded start, the first two from a Hopf point), under ``chord_tol`` with finite bounds: sqrt(chord_tol) of the range [lam_min, lam_max], the step whose chord misses a parabola that
     spans the plot (y = 4 x (1 - x) in the scaled plane, curvature 8) by chord_tol.  Without it the first steps
     would follow ds and dlam_max alone, and a short range could be crossed in one step; inf otherwise."""
     if not (math.isfinite(s.chord_tol) and math.isfinite(s.lam_min) and math.isfinite(s.lam_max)):

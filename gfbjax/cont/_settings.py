@@ -86,6 +86,10 @@ class Natural:
 ALGORITHMS = (PseudoArclength, Natural)
 
 
+#: Smallest ``chord_tol``: below it the chord test would ask for more than the corrector's tolerances resolve.
+CHORD_TOL_MIN = 1e-6
+
+
 @dataclass(frozen=True)
 class _StepSettings:
     """Fields shared by every continuation, with their common defaults (documented in the subclasses)."""
@@ -125,7 +129,7 @@ class _StepSettings:
         put("locate_tol", 0.0, 1.0, lo_open=True)
         put("max_angle", 0.0, math.pi, lo_open=True)
         put("event_refine", 0, 60, integer=True)
-        put("chord_tol", 0.0, inf, lo_open=True)
+        put("chord_tol", CHORD_TOL_MIN, inf)
 
 
 @dataclass(frozen=True)
@@ -138,12 +142,17 @@ class CycleSettings(_StepSettings):
     failed correction halves the step below it), ``ds_max`` >= ds; after a correction in at most ``fast_iter``
     Newton iterations the step grows by ``grow`` in [1, 10]; ``dlam_max`` caps the predicted change of lam per
     step (the arclength metric can be dominated by T or by many states; inf = no cap).  ``chord_tol`` > 0 places
-    the points where the branch bends: straight lines between recorded points (in the plane of lam and each
+    the points where the branch bends: straight lines between recorded points (in the space of lam and each
     recorded component's max and min, each scaled by its range over the branch so far) stay within about
     ``chord_tol`` of the branch; the next step shrinks (at most by half) or may grow to that from the curvature of
-    the last three points, a step that misses by more than twice that is retried shorter, and with finite bounds
-    the first two steps' change of lam is capped at sqrt(chord_tol) (lam_max - lam_min) (inf, the default: no such
-    limit; ``_driver._chord_factor``, ``_driver._chord_dlam``).
+    the last three points (never below ds_min), a step that misses by more than twice that is retried shorter, and
+    with finite bounds the steps before three points exist (one after a recorded start) change lam by at most
+    sqrt(chord_tol) (lam_max - lam_min); ``chord_tol`` in [1e-6, inf] (inf, the default: no such limit; below 1e-6
+    it would ask for more than the corrector's tolerances resolve; ``_driver._chord_factor``, ``_chord_dlam``).
+    Each quantity's scale is at least a tenth of its size: one that varies by less is not resolved, and one that
+    stays at round-off level next to zero, or that starts to move after being exactly constant, is given its first
+    variations as its range, so that the test refines there (a stall in the worst case: leave such a component out
+    of the problem's recorded ones).
     ``direction``: +1/-1, the initial orientation in lam.  Bounds: ``max_points`` recorded points; the branch ends
     (``REACHED_END``) when lam leaves [``lam_min``, ``lam_max``].
     Guarded steps: a step whose tangent turns by more than ``max_angle`` [rad] from the last one is rejected and

@@ -302,18 +302,19 @@ def add_step_options(group: Any, *, arclength: bool = True) -> None:
     group.add_argument("--chord-tol", type=float, default=D["chord_tol"], metavar="TOL",
                        help="straight lines between the points stay within TOL of the plotted curves, each scaled "
                             f"by its range: points gather where the branch bends (default {D['chord_tol']:g}; "
-                            "inf: steps set by the step options alone)")
+                            "inf: steps set by the step options alone; --chord-tol inf --dlam-max 0.02 gives the "
+                            "fixed speed step of versions before 2026-12)")
     group.add_argument("--max-points", type=int, default=D["max_points"], metavar="P",
                        help=f"most points on the branch (default {D['max_points']})")
 
 
 def check_chord_tol(value: float) -> float:
-    """--chord-tol: a number > 0, inf allowed (no chord limit); ParameterError naming the option otherwise."""
-    if value == math.inf:
-        return value
-    if not (isinstance(value, float) and math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"--chord-tol = {value!r} is outside the allowed range: a number > 0, or inf (no chord "
-                             "limit)")
+    """--chord-tol in [CHORD_TOL_MIN, inf] (inf: no chord limit); ParameterError naming the option otherwise."""
+    from ...cont._settings import CHORD_TOL_MIN
+
+    if not (isinstance(value, float) and CHORD_TOL_MIN <= value <= math.inf):
+        raise ParameterError(f"--chord-tol = {value!r} is outside the allowed range [{CHORD_TOL_MIN:g}, inf] "
+                             "(inf: no chord limit)")
     return value
 
 

@@ -79,7 +79,9 @@ def _saved_branch(args: argparse.Namespace) -> tuple[Any, Any, Any]:
 
     given = [opt for opt, dest in (("--system", "system"), ("--set", "overrides"), ("--preset", "preset"),
                                    ("--nx", "nx"), ("--nz", "nz"), ("--start", "start"), ("--end", "end"),
-                                   ("--N", "N"), ("--m", "m"), ("--resume", "resume"), ("--h-rub-um", "h_rub_um"),
+                                   ("--N", "N"), ("--m", "m"), ("--ds", "ds"), ("--ds-max", "ds_max"),
+                                   ("--dlam-max", "dlam_max"), ("--chord-tol", "chord_tol"),
+                                   ("--max-points", "max_points"), ("--resume", "resume"), ("--h-rub-um", "h_rub_um"),
                                    ("--on-contact", "on_contact"))
              if getattr(args, dest, None) != args.option_default(dest)]
     if given:
