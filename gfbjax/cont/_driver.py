@@ -471,6 +471,10 @@ def _violates(c: Curve, tests: dict) -> bool:
 #: tenth of its size, its scale is that tenth, so that the first points of a branch (whose range so far is small)
 #: are not resolved as if that small range filled the plot, nor is the noise of the discretisation.
 CHORD_FLOOR = 0.1
+#: And at least this fraction of the largest recorded component: a component that varies at round-off level next to
+#: zero (a residual, a symmetric state) is noise to the test, not a curve filling the plot (review of session 15: such
+#: a component held a branch for 3000 points).  Quantities of a physical size (the GFB positions) are far above it.
+CHORD_ROUNDOFF = 1e-6
 #: A step whose chord factor is below this is retried (its chord misses the curve by more than 1 / CHORD_RETRY^2
 #: = 2 chord_tol): the curvature that set the step came from the points before it.
 CHORD_RETRY = 1.0 / math.sqrt(2.0)
@@ -497,13 +501,14 @@ def _chord_factor(last3: list[np.ndarray], rows: list[np.ndarray], tol: float) -
     points (the new one last), ``rows``: of every row so far.
 
     Each plotted quantity is scaled by its range over the rows so far (as a plot's axes are; at least
-    :data:`CHORD_FLOOR` of its size).  In that space the middle of the three points lies d from the chord of the
+    :data:`CHORD_FLOOR` of its size, and a component at least :data:`CHORD_ROUNDOFF` of the largest one).  In that space the middle of the three points lies d from the chord of the
     outer two, and d = kappa h1 h2 / 2 for a curvature kappa and chords h1, h2.  A chord of length h misses the
     curve by at most kappa h^2 / 8, so a chord may be h = sqrt(8 tol / kappa) long: the factor is that over h2
     (inf on a straight line).
     """
     Y = np.array(rows + [last3[-1]])
     scale = np.maximum(np.ptp(Y, axis=0), CHORD_FLOOR * np.max(np.abs(Y), axis=0))
+    scale[1:] = np.maximum(scale[1:], CHORD_ROUNDOFF * np.max(np.abs(Y[:, 1:]), initial=0.0))
     scale[scale == 0.0] = 1.0
     q0, q1, q2 = (q / scale for q in last3)
     h1, h2 = float(np.linalg.norm(q1 - q0)), float(np.linalg.norm(q2 - q1))

@@ -149,10 +149,10 @@ class CycleSettings(_StepSettings):
     with finite bounds the steps before three points exist (one after a recorded start) change lam by at most
     sqrt(chord_tol) (lam_max - lam_min); ``chord_tol`` in [1e-6, inf] (inf, the default: no such limit; below 1e-6
     it would ask for more than the corrector's tolerances resolve; ``_driver._chord_factor``, ``_chord_dlam``).
-    Each quantity's scale is at least a tenth of its size: one that varies by less is not resolved, and one that
-    stays at round-off level next to zero, or that starts to move after being exactly constant, is given its first
-    variations as its range, so that the test refines there (a stall in the worst case: leave such a component out
-    of the problem's recorded ones).
+    Each quantity's scale is at least a tenth of its size (one that varies by less is not resolved) and a
+    component's at least 1e-6 of the largest component (round-off next to zero is not a curve).  A lone component
+    that starts to move after being exactly constant is given its first variations as its range, so that the test
+    refines there, down to ds_min steps in the worst case (leave it out of the recorded ones, or chord_tol=inf).
     ``direction``: +1/-1, the initial orientation in lam.  Bounds: ``max_points`` recorded points; the branch ends
     (``REACHED_END``) when lam leaves [``lam_min``, ``lam_max``].
     Guarded steps: a step whose tangent turns by more than ``max_angle`` [rad] from the last one is rejected and
