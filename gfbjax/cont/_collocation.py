@@ -79,6 +79,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.scipy.linalg import solve_triangular
 
+from ._scalars import strong
+
 VectorField = Callable[[jax.Array, jax.Array, Any], jax.Array]
 
 
@@ -179,7 +181,8 @@ class Orbit(eqx.Module):
     """Discrete periodic orbit.
 
     mesh: (N+1,) increasing, mesh[0]=0, mesh[-1]=1;  xm: (N+1, n) mesh-node
-    values; xi: (N, m-1, n) interior node values;  T: period;  lam: parameter.
+    values; xi: (N, m-1, n) interior node values;  T: period;  lam: parameter (both stored as strongly typed
+    scalars, see :func:`._scalars.strong`).
     """
 
     mesh: jax.Array
@@ -187,6 +190,9 @@ class Orbit(eqx.Module):
     xi: jax.Array
     T: jax.Array
     lam: jax.Array
+
+    def __init__(self, mesh: Any, xm: Any, xi: Any, T: Any, lam: Any):
+        self.mesh, self.xm, self.xi, self.T, self.lam = mesh, xm, xi, strong(T), strong(lam)
 
     @property
     def N(self) -> int:
@@ -342,6 +348,9 @@ class Constraint(eqx.Module):
     base: Orbit
     v: Orbit
     ds: jax.Array
+
+    def __init__(self, ref: Orbit, base: Orbit, v: Orbit, ds: Any):
+        self.ref, self.base, self.v, self.ds = ref, base, v, strong(ds)
 
 
 def natural_constraint(ref: Orbit, lam_target: Any) -> Constraint:

@@ -40,6 +40,7 @@ from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings,
                       sign_changes, signed_min)
 from ._newton import NewtonSettings, solve as newton_solve
 from ._problem import EquilibriumProblem
+from ._scalars import strong
 from ._settings import EquilibriumSettings
 
 __all__ = ["HopfPoint", "continue_equilibria", "hopf_point", "IMAG_TOL"]
@@ -138,12 +139,12 @@ class EquilibriumCurve(Curve):
         return float(a[-1])
 
     def palc_constraint(self, base, tangent, ds, ref):
-        return _Row(jnp.asarray(base), jnp.asarray(tangent), jnp.asarray(float(ds)))
+        return _Row(jnp.asarray(base), jnp.asarray(tangent), strong(float(ds)))
 
     def natural_constraint(self, ref, lam):
         base = np.array(ref, float)
         base[-1] = lam
-        return _Row(jnp.asarray(base), jnp.asarray(self._e_lam), jnp.asarray(0.0))
+        return _Row(jnp.asarray(base), jnp.asarray(self._e_lam), strong(0.0))
 
     def correct(self, pred, con):
         sol = _correct(self.problem.f, self.problem.args, jnp.asarray(pred, float), con, self.settings.newton)

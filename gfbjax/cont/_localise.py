@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
+from scipy.optimize import brentq
 
 __all__ = ["Found", "add_discretisation_error", "bracket", "localise", "locate", "step_span"]
 
@@ -356,10 +357,11 @@ def _relocated_shift(run: Any, f: Found, X2: Any, t2: Any, max_iter: int = 16) -
 
     The zero on the finer discretisation, in the arclength s along the carried tangent (each point corrected on
     the hyperplane at distance s from the carried point): secant steps from the step's slope until the sign
-    changes, then the regula falsi of :func:`locate` on that bracket, to a precision (1e-3 of the test function)
-    that suits an error estimate.  The secant alone would wander where the discrete curve has corners (a mesh
-    node crossing a kink makes the tangent, hence the fold test, jump).  A step that reduces the test function
-    tenfold ends the search at once: the secant's zero is then accurate to far better than the move itself."""
+    changes, then Brent's method on that bracket (:func:`_bracketed_zero`), to a precision (1e-3 of the test
+    function) that suits an error estimate.  The secant alone would wander where the discrete curve has corners
+    (a mesh node crossing a kink makes the tangent, hence the fold test, jump).  A step that reduces the test
+    function tenfold ends the search at once: the secant's zero is then accurate to far better than the move
+    itself."""
     c, kind, slope = run.curve, f.kind, f.slope
     budget = [max_iter]
 
@@ -389,17 +391,58 @@ def _relocated_shift(run: Any, f: Found, X2: Any, t2: Any, max_iter: int = 16) -
             lam_z = lam1 - g1 * (lam1 - lam0) / (g1 - g0) if g1 != g0 else lam1
             return abs(lam_z - c.lam(f.point))
         if np.sign(g1) != np.sign(g0):
-            lo, hi = (s0, g0), (s1, g1)
-            if s1 < s0:
-                lo, hi = hi, lo
-            _, lam_z, _, _ = locate(lambda u: g(lo[0] + u), hi[0] - lo[0], lo[1], hi[1], tol=1e-3, s_tol=1e-4,
-                                    max_iter=max(budget[0], 1))
-            return math.nan if lam_z is None else abs(lam_z - c.lam(f.point))
+            tol = 1e-3 * min(1.0, max(abs(g0), abs(g1)))
+            lam_z = _bracketed_zero(g, {s0: (g0, lam0), s1: (g1, lam1)}, tol, budget)
+            return abs(lam_z - c.lam(f.point))
         # same sign: a secant step, at most four times as long as the last one (a flat stretch would fling it)
         step = -g1 * (s1 - s0) / (g1 - g0) if g1 != g0 else 2.0 * (s1 - s0)
         step = float(np.clip(step, -4.0 * abs(s1 - s0), 4.0 * abs(s1 - s0)))
         s0, g0, lam0, s1 = s1, g1, lam1, s1 + step
     return math.nan
+
+
+class _Stop(Exception):
+    """Ends Brent's iteration of :func:`_bracketed_zero` from inside its function."""
+
+
+def _bracketed_zero(g: Callable[[float], tuple[float, Any]], known: dict[float, tuple[float, float]], tol: float,
+                    budget: list[int]) -> float:
+    """lam where the test function ``g(s) -> (value, lam)`` vanishes between the two arclengths of ``known``
+    ({s: (value, lam)}, values of opposite signs), by Brent's method (``scipy.optimize.brentq``: inverse quadratic
+    and secant steps with bisection as the safeguard), ended as soon as a value is within ``tol``, or when the
+    bracket has closed to 1e-4 (of the bracket where that is longer than 1), as :func:`locate` closes it.  When the
+    bracket closes (on a jump, or a zero that the tolerance was not met at), or ``budget`` (corrections left,
+    decremented by ``g``) runs out, the zero of the line through the ends of the narrowest sign change evaluated
+    stands for it; NaN where a correction fails.
+
+    Why not the Illinois regula falsi of :func:`locate`: next to a zero reached along a curved test function it
+    keeps one end fixed and creeps; on the GFB's NS the staggered mesh's relocation took five corrections after the
+    bracket, Brent's method four."""
+    def value(sv: float) -> float:
+        sv = float(sv)
+        if sv not in known:
+            if budget[0] <= 0:
+                raise _Stop(None)
+            v, lam = g(sv)
+            if not np.isfinite(v):
+                raise _Stop(math.nan)
+            known[sv] = (float(v), float(lam))
+        v, lam = known[sv]
+        if abs(v) <= tol:
+            raise _Stop(lam)
+        return v
+
+    lo, hi = sorted(known)
+    try:
+        brentq(value, lo, hi, xtol=1e-4 * max(1.0, hi - lo), maxiter=100, disp=False)
+    except _Stop as stop:
+        if stop.args[0] is not None:
+            return float(stop.args[0])
+    # the narrowest sign change among the evaluations, its zero by the line through its ends
+    pts = sorted(known.items())
+    pairs = [(a, b) for a, b in zip(pts, pts[1:]) if np.sign(a[1][0]) != np.sign(b[1][0])]
+    (_, (ga, la)), (_, (gb, lb)) = min(pairs, key=lambda p: p[1][0] - p[0][0])
+    return la + (lb - la) * ga / (ga - gb)
 
 
 def add_discretisation_error(run: Any, f: Found) -> None:

@@ -149,6 +149,33 @@ def test_continuation_compiles_newton_kernel_once(sl_branch):
     assert _linear._dense_correct._cache_size() == before
 
 
+def test_fixed_lam_and_arclength_rows_share_one_kernel(sl_branch):
+    """Session 16: the fixed-lam row (natural_constraint) held Python zeros, weakly typed scalars to JAX, and every
+    kernel that sees a constraint compiled once more for it than for the arclength row (the GFB's NS relocation
+    recompiled the residual, 0.4 s).  Scalars of orbits and rows are stored strongly typed: one kernel serves
+    both rows, and an orbit made from Python numbers."""
+    import jax
+    from gfbjax.cont import _collocation as col, _linear, bind_solver, natural_constraint, palc_constraint
+
+    def field(x, lam, w):  # a vector field of its own: the kernels' caches start empty for it
+        return stuart_landau(x, lam, w)
+
+    prob = CycleProblem(field, 2, jnp.asarray(W))
+    st = CycleSettings(m=4, N=10)
+    o = start_from_branch(sl_branch, 2).orbit
+    solver = bind_solver(prob, col.Scheme(4), st)
+    before = _linear._dense_correct._cache_size()
+    rows = [natural_constraint(o, float(o.lam)),
+            palc_constraint(o, col.Orbit(o.mesh, 0 * o.xm, 0 * o.xi, 0.0, 1.0), 0.0),
+            palc_constraint(o, col.Orbit(o.mesh, 0 * o.xm, 0 * o.xi, jnp.asarray(0.0), jnp.asarray(1.0)),
+                            jnp.asarray(0.0))]
+    for con in rows:
+        assert not any(jax.typeof(leaf).weak_type for leaf in jax.tree_util.tree_leaves(con))
+        sol, _ = solver.correct(o, con, st.newton)
+        assert sol.converged
+    assert _linear._dense_correct._cache_size() == before + 1
+
+
 def test_callback_stop_and_user_errors_propagate(sl_branch):
     prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
     st = CycleSettings(m=4, N=10, ds=0.05, max_points=10, floquet=TransferProduct())
