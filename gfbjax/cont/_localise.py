@@ -410,14 +410,15 @@ def _bracketed_zero(g: Callable[[float], tuple[float, Any]], known: dict[float, 
     """lam where the test function ``g(s) -> (value, lam)`` vanishes between the two arclengths of ``known``
     ({s: (value, lam)}, values of opposite signs), by Brent's method (``scipy.optimize.brentq``: inverse quadratic
     and secant steps with bisection as the safeguard), ended as soon as a value is within ``tol``, or when the
-    bracket has closed to 1e-4 (of the bracket where that is longer than 1), as :func:`locate` closes it.  When the
-    bracket closes (on a jump, or a zero that the tolerance was not met at), or ``budget`` (corrections left,
-    decremented by ``g``) runs out, the zero of the line through the ends of the narrowest sign change evaluated
-    stands for it; NaN where a correction fails.
+    bracket has closed to 1e-4 of its first width.  When the bracket closes (on a jump, or a zero that the
+    tolerance was not met at), ``budget`` (corrections left, decremented by ``g``) runs out, or a correction inside
+    the bracket fails (``g`` gives NaN), the zero of the line through the ends of the narrowest sign change
+    evaluated stands for it.
 
     Why not the Illinois regula falsi of :func:`locate`: next to a zero reached along a curved test function it
     keeps one end fixed and creeps; on the GFB's NS the staggered mesh's relocation took five corrections after the
     bracket, Brent's method four."""
+
     def value(sv: float) -> float:
         sv = float(sv)
         if sv not in known:
@@ -425,7 +426,8 @@ def _bracketed_zero(g: Callable[[float], tuple[float, Any]], known: dict[float, 
                 raise _Stop(None)
             v, lam = g(sv)
             if not np.isfinite(v):
-                raise _Stop(math.nan)
+                # a failed correction: the bracket evaluated so far still holds a zero
+                raise _Stop(None)
             known[sv] = (float(v), float(lam))
         v, lam = known[sv]
         if abs(v) <= tol:
@@ -434,7 +436,9 @@ def _bracketed_zero(g: Callable[[float], tuple[float, Any]], known: dict[float, 
 
     lo, hi = sorted(known)
     try:
-        brentq(value, lo, hi, xtol=1e-4 * max(1.0, hi - lo), maxiter=100, disp=False)
+        # xtol relative to the bracket: an absolute one would leave a narrow bracket (a shift far below 1e-4 in s)
+        # without a single evaluation inside
+        brentq(value, lo, hi, xtol=1e-4 * (hi - lo), maxiter=100, disp=False)
     except _Stop as stop:
         if stop.args[0] is not None:
             return float(stop.args[0])
