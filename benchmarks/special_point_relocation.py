@@ -1,5 +1,4 @@
-"""The cost of a special point's error bar: its relocation on the curve's two other discretisations, and what a
-branch compiles.
+"""Cost of a special point's error bar (its relocations on two other meshes) and the kernels a branch compiles.
 
 A short branch of the reference system across its NS (Omega_bar 0.36 -> 0.40, default settings, 6 points), twice
 in one fresh process with the persistent compilation cache off.  For each relocation (the mesh with every interval
@@ -33,9 +32,10 @@ MESHES = ("halved", "staggered")  # the order of the cycles' other_discretisatio
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--start", type=float, default=0.36)
-    ap.add_argument("--end", type=float, default=0.40)
-    ap.add_argument("--out", default=str(RESULTS / "special_point_relocation.json"))
+    ap.add_argument("--start", type=float, default=0.36, help="Omega_bar at the branch's start")
+    ap.add_argument("--end", type=float, default=0.40, help="Omega_bar at its end (the NS lies between)")
+    ap.add_argument("--out", default=str(RESULTS / "special_point_relocation.json"),
+                    help="result file (default: the committed one in benchmarks/results)")
     a = ap.parse_args()
 
     compiled = [0]

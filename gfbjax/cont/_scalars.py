@@ -11,20 +11,26 @@ __all__ = ["strong"]
 
 
 def strong(v: Any) -> Any:
-    """A scalar as a strongly typed float array: a Python number, or a weakly typed array made from one, would
-    give a compiled kernel an argument of another type (JAX's weak type) than the arrays of the computation, and
-    the kernel would compile once more for it (the relocations of a special point compiled the residual anew,
-    0.4 s each, because the fixed-lam row held weak zeros).  Anything else (strongly typed arrays, tracers, None,
-    booleans) is returned as it is.
+    """A real scalar as a strongly typed array of the computation's float type (float64 with gfbjax's x64).
+
+    A Python number, or a weakly typed array made from one (JAX's weak type), gives a compiled kernel an argument
+    of another type than the arrays of the computation, and the kernel compiles once more for it: the relocations
+    of a special point compiled the residual anew, 0.4 s each, because the fixed-lam row held weak zeros.  A 0-d
+    array of another real dtype (``np.array(3)`` as ``np.load`` gives it, ``jnp.float32``) is cast too: the
+    corrector's loop carries the float type and refuses another.  Anything else (float arrays of that type, arrays
+    of higher rank, tracers, None, booleans, complex numbers) is returned as it is.
 
     A module that applies it in ``__init__`` (:class:`._collocation.Orbit`, :class:`._collocation.Constraint`)
     cannot serve as a ``jax.vmap`` ``in_axes`` spec (its integer axes would become floats); vmap over its arrays."""
-    if isinstance(v, (bool, np.bool_)):
+    if isinstance(v, (bool, np.bool_)) or v is None or isinstance(v, jax.core.Tracer):
         return v
     if isinstance(v, (int, float, np.integer, np.floating)):
         return jnp.asarray(v, dtype=jnp.result_type(float))
-    if isinstance(v, jax.Array) and not isinstance(v, jax.core.Tracer) and v.weak_type:
-        # a weak integer (jnp.asarray(3)) becomes a float, as the Python int 3 does
-        inexact = jnp.issubdtype(v.dtype, jnp.inexact)
-        return jnp.asarray(v, dtype=v.dtype if inexact else jnp.result_type(float))
+    if isinstance(v, (np.ndarray, jax.Array)) and v.ndim == 0 and (
+            jnp.issubdtype(v.dtype, jnp.integer) or jnp.issubdtype(v.dtype, jnp.floating)):
+        # any real 0-d array (np.array(3) as np.load gives it, jnp.int32, jnp.float32, a weak array) becomes the
+        # float of the computation: the corrector's loop carries that type and refuses another
+        dtype = jnp.result_type(float)
+        if v.dtype != dtype or getattr(v, "weak_type", False):
+            return jnp.asarray(v, dtype=dtype)
     return v

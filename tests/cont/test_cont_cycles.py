@@ -174,9 +174,9 @@ def test_fixed_lam_and_arclength_rows_share_one_kernel(sl_branch):
         sol, _ = solver.correct(o, con, st.newton)
         assert sol.converged
     assert _linear._dense_correct._cache_size() == before + 1
-    # a period given as a weak integer array (jnp.asarray(3)) is a float period, as the Python int 3 is: the
-    # corrector's loop, which carries floats, takes it
-    for T in (3, jnp.asarray(3)):
+    # a period given as a weak integer array (jnp.asarray(3)), a 0-d NumPy integer (as np.load gives it) or another
+    # precision is a float period, as the Python int 3 is: the corrector's loop, which carries floats, takes it
+    for T in (3, jnp.asarray(3), np.array(3), jnp.int32(3), jnp.float32(3.0)):
         o3 = col.Orbit(o.mesh, o.xm, o.xi, T, o.lam)
         assert o3.T.dtype == o.T.dtype and not jax.typeof(o3.T).weak_type
         sol, _ = solver.correct(o3, natural_constraint(o3, float(o.lam)), st.newton)
