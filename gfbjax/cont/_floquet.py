@@ -370,6 +370,15 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
     three block products before anything is returned, and the two Ritz values after the cut must have converged
     as well (to 1e-3): the returned set is then the leading one, not just a converged one."""
     b = max(1, min(block, n))
+    # A new column whose part outside the space is below ``drop`` (relative) is left out.  That part is what the
+    # space still lacks, and a pair held to ``tol`` may lack exactly such parts: so ``drop`` lies below ``tol``.
+    # At 1e-10 (above tol = 1e-11) a warm start from the last point's nearly exact Floquet vectors lost them: on the
+    # GFB reference grid at the NS point the leading pair's residual stalled at 6e-11 and the space grew to all 433
+    # columns, where a cold start needs 176 (now 120; tests/cont/test_cont_sparse.py has a case).  The price: a
+    # start exact to 1e-12 keeps columns it does not need and costs about a cold start, where dropping them made
+    # the blocks narrow (4 new columns each) and the start cheaper (~100 columns against 176 there).  On the whole
+    # reference branch the multipliers take 5,886 columns against 6,213 (benchmarks/README.md, cycle_branch.py).
+    drop = min(1e-10, max(1e-1 * tol, 100 * np.finfo(float).eps))
     warm = start is not None and start.shape[0] == n
     # a whole block of fixed pseudo-random columns, or, after a warm start, enough to top it up (at least 4)
     fill = np.random.default_rng(0).standard_normal((n, max(b - start.shape[1], 4) if warm else b))
@@ -402,7 +411,7 @@ def krylov_leading(matmat, n: int, *, k: int, inside: float, tol: float, tol_ins
                 return (theta[:count], _ritz_basis(X)) + ((X,) if vectors else ())
         if dim >= max_dim:
             return None
-        nxt = _orthonormal(Ws[-1][:, :max_dim - dim], Qa, drop=True)
+        nxt = _orthonormal(Ws[-1][:, :max_dim - dim], Qa, drop=True, inside=drop)
         if nxt.shape[1] == 0:  # the space is invariant: fill with fresh directions
             nxt = _orthonormal(np.random.default_rng(dim).standard_normal((n, min(b, max_dim - dim))), Qa,
                                drop=True)
@@ -431,9 +440,11 @@ def _wanted(theta: np.ndarray, k: int, inside: float) -> int:
     return count if abs(theta[count - 1]) < inside else len(theta) + 1  # all at or outside: grow the space
 
 
-def _orthonormal(V: np.ndarray, against: np.ndarray | None, drop: bool = False) -> np.ndarray:
+def _orthonormal(V: np.ndarray, against: np.ndarray | None, drop: bool = False,
+                 inside: float = 1e-10) -> np.ndarray:
     """Orthonormal columns spanning V minus its part in span(against) (orthonormal); two passes of classical
-    Gram-Schmidt then a QR; with ``drop`` the columns that were (numerically) inside are left out."""
+    Gram-Schmidt then a QR; with ``drop`` the columns that were (numerically) inside are left out: those whose
+    part outside (after pivoting) is at most ``inside`` times the longest column of V."""
     import scipy.linalg as sla
 
     V = np.array(V, float)
@@ -444,7 +455,7 @@ def _orthonormal(V: np.ndarray, against: np.ndarray | None, drop: bool = False) 
     if not drop:
         return np.linalg.qr(V)[0]
     Q, R, _ = sla.qr(V, mode="economic", pivoting=True)
-    rank = int(np.sum(np.abs(np.diag(R)) > 1e-10 * max(scale, 1e-300)))
+    rank = int(np.sum(np.abs(np.diag(R)) > inside * max(scale, 1e-300)))
     Q = Q[:, :rank]
     if against is not None and rank:
         # a column that lost most of its length to the projection keeps rounding errors of the original size:

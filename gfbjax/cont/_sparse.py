@@ -95,25 +95,18 @@ def _sparse_linearisation(o: "SparseCollocation", orbit: col.Orbit, con: col.Con
     Kd, ALd, Bp = (np.asarray(a) for a in _linear_data(o.problem.f, o.problem.args, orbit, o.scheme, o._key,
                                                        o._Kperm, o._isdiag))
     mn, n = o.scheme.m * o.n, o.n
-    lus, AL = [], []
-    for j in range(Kd.shape[0]):
-        K = sps.csc_matrix((Kd[j], o._K_indices, o._K_indptr), shape=(mn, mn))
-        try:
-            lus.append(o._factorise(K))
-        except RuntimeError as e:  # "Factor is exactly singular"
-            raise LinearSolveError(f"collocation block of interval {j} is singular: {e}") from e
-        AL.append(sps.csr_matrix((ALd[j], o._AL_indices, o._AL_indptr), shape=(mn, n)))
+    AL = [sps.csr_matrix((ALd[j], o._AL_indices, o._AL_indptr), shape=(mn, n)) for j in range(Kd.shape[0])]
     coef, cp, _ = _coeffs(orbit, con, o.scheme)
-    return IntervalSweeps(orbit, o.scheme.m, lus, AL, Bp, np.asarray(coef), np.asarray(cp), o.settings)
+    return IntervalSweeps(orbit, o.scheme.m, o._factorise_all(Kd), AL, Bp, np.asarray(coef), np.asarray(cp),
+                          o.settings)
 
 
 class _PermutedLU:
-    """SuperLU of K with a column order fixed in advance: ``lu`` factorises K[:, order] (no ordering of its own).
-    The ``solve(b, trans)`` of K itself."""
+    """SuperLU of K P, a column order P fixed in advance (``lu`` orders nothing itself), given as the compressed
+    columns of K P; ``inverse``: P's inverse permutation.  The ``solve(b, trans)`` of K itself."""
 
-    def __init__(self, K: sps.csc_matrix, order: np.ndarray, inverse: np.ndarray):
-        # order: the columns of K in factorisation order; inverse: its inverse permutation
-        self.lu, self.order, self.inverse = spla.splu(K[:, order], permc_spec="NATURAL"), order, inverse
+    def __init__(self, KP: sps.csc_matrix, order: np.ndarray, inverse: np.ndarray):
+        self.lu, self.order, self.inverse = spla.splu(KP, permc_spec="NATURAL"), order, inverse
 
     def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
         if trans == "T":  # (K P)^T z = P^T b
@@ -149,19 +142,47 @@ class SparseCollocation(BoundSolver):
         self._AL_indices = np.tile(C, m).astype(np.int32)
         self._AL_indptr = np.searchsorted(rowsA, np.arange(m * n + 1)).astype(np.int32)
         self._order: tuple[np.ndarray, np.ndarray] | None = None  # column order of the blocks, from the first
+        self._KP: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # K[:, order]: value take, pattern
 
-    def _factorise(self, K: sps.csc_matrix) -> Any:
-        """SuperLU of one interval block.  Every block of every orbit has the same pattern, so the fill-reducing
-        column order (``permc_spec``) is computed once, from the first, and given to the rest (a fifth of the
-        factorisation time on the GFB)."""
+    def _factorise_all(self, Kd: np.ndarray) -> list:
+        """SuperLU factorisations of the interval blocks whose compressed-column values are the rows of Kd.
+
+        Every block of every orbit has the same pattern, so the fill-reducing column order (``permc_spec``) is
+        computed once, from the first block the solver sees, and given to the rest as a permutation of their
+        values (a fifth of the factorisation time on the GFB), not by indexing each block's columns (0.5 ms a
+        block there).
+
+        Serial on purpose: two threads factorised large random blocks (2.3 M nonzeros in L+U) 1.6x faster on 2
+        cores, but the reference grid's blocks (169,000 nonzeros, 5-6 ms each) not at all inside the branch's
+        process (a linearisation 190 ms against 182 ms), and the timed reference branch took 97 s against 77 s
+        for the serial code (benchmarks/README.md, cycle_branch.py)."""
+        mn = self.scheme.m * self.n
+        lus = []
         if self._order is None:
-            lu = spla.splu(K, permc_spec=self.settings.permc_spec)
+            K = sps.csc_matrix((Kd[0], self._K_indices, self._K_indptr), shape=(mn, mn))
+            try:
+                lu = spla.splu(K, permc_spec=self.settings.permc_spec)
+            except RuntimeError as e:  # "Factor is exactly singular"
+                raise LinearSolveError(f"collocation block of interval 0 is singular: {e}") from e
             position = np.asarray(lu.perm_c)  # SuperLU's perm_c: where each column of K goes
             cols = np.empty_like(position)
             cols[position] = np.arange(len(position))  # the columns of K in factorisation order
             self._order = (cols, position)
-            return lu
-        return _PermutedLU(K, *self._order)
+            # the values of K[:, cols] in compressed-column order, taken from those of K, and its pattern
+            starts, ends = self._K_indptr[cols], self._K_indptr[cols + 1]
+            take = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends)])
+            self._KP = (take, self._K_indices[take],
+                        np.concatenate([[0], np.cumsum(ends - starts)]).astype(np.int32))
+            lus.append(lu)
+        take, indices, indptr = self._KP
+
+        for j in range(len(lus), len(Kd)):
+            try:
+                lus.append(_PermutedLU(sps.csc_matrix((Kd[j][take], indices, indptr), shape=(mn, mn)),
+                                         *self._order))
+            except RuntimeError as e:  # "Factor is exactly singular"
+                raise LinearSolveError(f"collocation block of interval {j} is singular: {e}") from e
+        return lus
 
     def linearise(self, orbit: col.Orbit, con: col.Constraint | None = None) -> IntervalSweeps:
         return _sparse_linearisation(self, orbit, con if con is not None else col.natural_constraint(orbit,
