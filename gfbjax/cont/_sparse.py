@@ -175,11 +175,10 @@ class SparseCollocation(BoundSolver):
                         np.concatenate([[0], np.cumsum(ends - starts)]).astype(np.int32))
             lus.append(lu)
         take, indices, indptr = self._KP
-
         for j in range(len(lus), len(Kd)):
             try:
                 lus.append(_PermutedLU(sps.csc_matrix((Kd[j][take], indices, indptr), shape=(mn, mn)),
-                                         *self._order))
+                                       *self._order))
             except RuntimeError as e:  # "Factor is exactly singular"
                 raise LinearSolveError(f"collocation block of interval {j} is singular: {e}") from e
         return lus

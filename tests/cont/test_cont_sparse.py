@@ -303,8 +303,9 @@ def test_inexact_chord_newton_converges_to_the_exact_newton_orbit(setup, monkeyp
 
 def test_blocks_factorised_in_a_given_column_order_solve_exactly():
     """Every interval block shares one pattern, so the sparse solver computes SuperLU's column order once, from the
-    first block, and factorises the others in it (``_PermutedLU``, their values permuted into that order): the solves with K and K^T are exact for every block, the fill is that of SuperLU's own
-    ordering, and a singular block is named by its interval."""
+    first block, and factorises the others in it (``_PermutedLU``, their values permuted into that order): the
+    solves with K and K^T are exact for every block, the fill is that of SuperLU's own ordering, and a singular
+    block is named by its interval."""
     import types
 
     import scipy.sparse as sps
