@@ -225,3 +225,37 @@ def test_accuracy_line_gives_each_cause_its_own_remedy():
     acc = accuracy_summary(big)
     assert acc["max_multiplier_error"] is None and acc["max_stiff_modulus"] is None
     assert "flagged" not in accuracy_line(acc)
+
+
+def test_fresh_run_refuses_to_delete_an_unfinished_checkpoint(tmp_path, capsys):
+    """Re-running the command without --resume into the folder of a killed run must not delete its points (a
+    new user's report: the same command line again cleared OUT/checkpoint/); --fresh does, and a finished run's
+    checkpoint (end.json) is cleared as before."""
+    from gfbjax.cli.commands._checkpoints import checkpoint_folder
+    from gfbjax.cli.commands.cycles import register
+    from gfbjax.params import ParameterError
+    import argparse
+
+    ck = tmp_path / "checkpoint"
+    ck.mkdir()
+    (ck / "step_00000.npz").write_bytes(b"kept")
+    parser = register(argparse.ArgumentParser().add_subparsers())
+    args = parser.parse_args(["--out", str(tmp_path)])
+    with pytest.raises(ParameterError, match=r"unfinished run \(1 accepted step.*--resume"):
+        checkpoint_folder(args, tmp_path, "cycles")
+    assert (ck / "step_00000.npz").read_bytes() == b"kept"
+    (ck / "end.json").write_text('{"outcome": "reached_end", "message": ""}')
+    checkpoint_folder(args, tmp_path, "cycles")  # finished: cleared for the new run
+    assert not (ck / "step_00000.npz").exists()
+    ck.mkdir()
+    (ck / "step_00000.npz").write_bytes(b"again")  # unfinished again
+    checkpoint_folder(parser.parse_args(["--out", str(tmp_path), "--fresh"]), tmp_path, "cycles")
+    assert not (ck / "step_00000.npz").exists()
+
+
+def test_fresh_and_resume_exclude_each_other(tmp_path):
+    from gfbjax.cli import main
+
+    (tmp_path / "checkpoint").mkdir()
+    (tmp_path / "cycles_args.json").write_text('{"N": 8, "nx": 16}')
+    assert main(["cycles", "--resume", str(tmp_path), "--fresh"]) == 2

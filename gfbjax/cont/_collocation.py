@@ -79,7 +79,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.scipy.linalg import solve_triangular
 
-from ._scalars import strong
+from ._scalars import float_array, strong
 
 VectorField = Callable[[jax.Array, jax.Array, Any], jax.Array]
 
@@ -192,7 +192,8 @@ class Orbit(eqx.Module):
     lam: jax.Array
 
     def __init__(self, mesh: Any, xm: Any, xi: Any, T: Any, lam: Any):
-        self.mesh, self.xm, self.xi, self.T, self.lam = mesh, xm, xi, strong(T), strong(lam)
+        self.mesh, self.xm, self.xi = float_array(mesh), float_array(xm), float_array(xi)
+        self.T, self.lam = strong(T), strong(lam)
 
     @property
     def N(self) -> int:

@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["strong"]
+__all__ = ["strong", "float_array"]
 
 
 def strong(v: Any) -> Any:
@@ -30,6 +30,23 @@ def strong(v: Any) -> Any:
             jnp.issubdtype(v.dtype, jnp.integer) or jnp.issubdtype(v.dtype, jnp.floating)):
         # any real 0-d array (np.array(3) as np.load gives it, jnp.int32, jnp.float32, a weak array) becomes the
         # float of the computation: the corrector's loop carries that type and refuses another
+        dtype = jnp.result_type(float)
+        if v.dtype != dtype or getattr(v, "weak_type", False):
+            return jnp.asarray(v, dtype=dtype)
+    return v
+
+
+def float_array(v: Any) -> Any:
+    """An array of the computation's float type from a list, a tuple or an array of another real dtype (float32,
+    integers): the corrector's loop carries that type and refuses another (a float32 ``xm`` failed deep inside
+    JAX's while loop with a message about its carry).  Arrays of that type, tracers and anything else (None,
+    placeholders of tree utilities) are returned as they are."""
+    if isinstance(v, jax.core.Tracer):
+        return v
+    if isinstance(v, (list, tuple)):
+        return jnp.asarray(v, dtype=jnp.result_type(float))
+    if isinstance(v, (np.ndarray, jax.Array)) and (jnp.issubdtype(v.dtype, jnp.integer)
+                                                   or jnp.issubdtype(v.dtype, jnp.floating)):
         dtype = jnp.result_type(float)
         if v.dtype != dtype or getattr(v, "weak_type", False):
             return jnp.asarray(v, dtype=dtype)

@@ -181,6 +181,13 @@ def test_fixed_lam_and_arclength_rows_share_one_kernel(sl_branch):
         assert o3.T.dtype == o.T.dtype and not jax.typeof(o3.T).weak_type
         sol, _ = solver.correct(o3, natural_constraint(o3, float(o.lam)), st.newton)
         assert sol.converged and float(sol.x.T) == pytest.approx(float(o.T), rel=1e-6)
+    # states given as float32 arrays or nested lists, and a mesh given as a list, are the computation's floats too
+    for conv in (lambda a: np.asarray(a, np.float32), lambda a: jnp.asarray(a, jnp.float32),
+                 lambda a: np.asarray(a).tolist()):
+        o4 = col.Orbit(np.asarray(o.mesh).tolist(), conv(o.xm), conv(o.xi), o.T, o.lam)
+        assert all(a.dtype == o.xm.dtype for a in (o4.mesh, o4.xm, o4.xi))
+        sol, _ = solver.correct(o4, natural_constraint(o4, float(o.lam)), st.newton)
+        assert sol.converged and float(sol.x.T) == pytest.approx(float(o.T), rel=1e-5)
 
 
 def test_callback_stop_and_user_errors_propagate(sl_branch):

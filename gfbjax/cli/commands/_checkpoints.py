@@ -4,7 +4,9 @@ A run writes its options to ``OUT/<command>_args.json`` and appends every accept
 step starts from, to ``OUT/checkpoint/`` (:class:`gfbjax.cont.Checkpoint`).  ``--resume OUT`` runs the command
 again with the options of that run and continues its branch after the last point written: a kill (``kill -9``
 included) loses at most the point in progress, and the resumed branch equals an uninterrupted one.  A run without
-``--resume`` starts afresh: it clears ``OUT/checkpoint/``.
+``--resume`` starts afresh and clears ``OUT/checkpoint/`` when that holds a finished branch; an unfinished one (a
+killed or interrupted run: steps and no ``end.json``) is refused unless ``--fresh`` is given, since re-running the
+same command without ``--resume`` would otherwise delete the work it was meant to continue.
 """
 from __future__ import annotations
 
@@ -22,16 +24,19 @@ __all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interr
 FOLDER = "checkpoint"
 
 # options that do not change the computed branch: a resumed run may set them anew
-_FREE = frozenset({"quiet", "no_figures", "resume", "no_checkpoint", "out"})
+_FREE = frozenset({"quiet", "no_figures", "resume", "no_checkpoint", "out", "fresh"})
 
 
 def add_checkpoint_options(parser: argparse.ArgumentParser) -> None:
-    """Add ``--resume DIR`` and ``--no-checkpoint``."""
+    """Add ``--resume DIR``, ``--fresh`` and ``--no-checkpoint``."""
     g = parser.add_argument_group("checkpoints")
     g.add_argument("--resume", type=Path, default=None, metavar="DIR",
                    help="continue the branch of an earlier run whose --out was DIR, after its last point, with that "
                         "run's options (other options than --quiet/--no-figures are refused); the results are "
                         "written to DIR")
+    g.add_argument("--fresh", action="store_true",
+                   help=f"start afresh even where OUT/{FOLDER}/ holds an unfinished run (deleting it); without "
+                        "this, such a folder is refused, to be continued with --resume")
     g.add_argument("--no-checkpoint", action="store_true",
                    help=f"do not append each point to OUT/{FOLDER}/ (then a killed run cannot be resumed)")
     parser.set_defaults(option_default=parser.get_default)
@@ -57,6 +62,8 @@ def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
     if args.no_checkpoint:
         raise ParameterError("--resume and --no-checkpoint exclude each other (a resumed run goes on writing its "
                              "checkpoint)")
+    if getattr(args, "fresh", False):
+        raise ParameterError("--resume and --fresh exclude each other (--fresh deletes what --resume continues)")
     path = folder / f"{command}_args.json"
     if not path.is_file() or not (folder / FOLDER).is_dir():
         raise ParameterError(f"--resume {folder}: not the --out folder of a 'gfbjax {command}' run with checkpoints "
@@ -79,9 +86,16 @@ def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
 
 def checkpoint_folder(args: argparse.Namespace, out: Path, command: str) -> Path | None:
     """The checkpoint folder of this run (None with ``--no-checkpoint``); writes ``<command>_args.json``.  A fresh
-    run (no ``--resume``) clears an old checkpoint in ``out``."""
+    run (no ``--resume``) clears an old checkpoint in ``out``: that of a finished branch always, that of an
+    unfinished one only with ``--fresh`` (ParameterError otherwise, naming ``--resume``)."""
     folder = out / FOLDER
     if getattr(args, "resume", None) is None and folder.exists():
+        steps = len(list(folder.glob("step_*.npz")))
+        if steps and not (folder / "end.json").exists() and not getattr(args, "fresh", False):
+            raise ParameterError(
+                f"--out {out}: {folder} holds an unfinished run ({steps} accepted step{'s' * (steps != 1)}, no "
+                f"end recorded: killed or interrupted). Continue it with 'gfbjax {command} --resume {out}', "
+                f"start afresh with --fresh (deletes it), or choose another --out")
         shutil.rmtree(folder)
     if args.no_checkpoint:
         return None

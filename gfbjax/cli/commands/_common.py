@@ -305,7 +305,7 @@ def add_step_options(group: Any, *, arclength: bool = True) -> None:
                             "inf: steps set by the step options alone; --chord-tol inf --dlam-max 0.02 gives the "
                             "fixed speed step of versions before 2026-12)")
     group.add_argument("--max-points", type=int, default=D["max_points"], metavar="P",
-                       help=f"most points on the branch (default {D['max_points']})")
+                       help=f"most points on the branch, in [2, 10^6] (default {D['max_points']})")
 
 
 def check_chord_tol(value: float) -> float:

@@ -60,7 +60,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     add_system_options(p, NAME)
     r = p.add_argument_group("speed range")
     add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
-    add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
+    add_speed_option(r, "--end", default=1.0,
+                     help="end speed in Omega_bar (default 1.0); below --start the branch runs down in speed")
     n = p.add_argument_group("numerics")
     add_step_options(n)
     n.add_argument("--collocation", choices=("gauss", "radau"), default="gauss",

@@ -51,7 +51,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     add_system_options(p, NAME)
     r = p.add_argument_group("speed range")
     add_speed_option(r, "--start", default=0.05, help="start speed in Omega_bar (default 0.05)")
-    add_speed_option(r, "--end", default=1.0, help="end speed in Omega_bar (default 1.0)")
+    add_speed_option(r, "--end", default=1.0,
+                     help="end speed in Omega_bar (default 1.0); below --start the branch runs down in speed")
     n = p.add_argument_group("numerics")
     n.add_argument("--ds", type=float, default=0.05, help="initial arclength step (default 0.05)")
     n.add_argument("--ds-max", type=float, default=0.5, help="largest arclength step (default 0.5)")
