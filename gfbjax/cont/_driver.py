@@ -52,7 +52,7 @@ import numpy as np
 from ._branch import Branch, PointRecord
 from ._checkpoint import Checkpoint
 from ._newton import LinearSolveError
-from ._localise import Found, add_discretisation_error, bracket, localise, step_span
+from ._localise import SINGULAR_EVENTS, Found, add_discretisation_error, bracket, localise, step_span
 from ._results import Outcome, SpecialPoint
 
 __all__ = ["Curve", "continue_curve"]
@@ -410,10 +410,6 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
 
 
-#: Events at which the extended Jacobian itself is singular (a second branch through the point): the corrections
-#: that would locate them fail close to them, so one left unlocated *because those corrections failed* is no sign
-#: of a bad step and is not refined (one whose test function jumps still is: a jump to another branch).
-SINGULAR_EVENTS = ("BP", "BPC")
 
 
 def _unexplained(c: Curve, tests: dict | None, tests_n: dict, detect: tuple = (), found: list = (),

@@ -25,7 +25,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.optimize import brentq
 
-__all__ = ["Found", "add_discretisation_error", "bracket", "localise", "locate", "step_span"]
+__all__ = ["Found", "SINGULAR_EVENTS", "add_discretisation_error", "bracket", "localise", "locate", "step_span"]
 
 #: events at which lam turns: inside a step their lam lies beyond the step's ends, by up to the step itself
 TURNING = ("FOLD", "LPC")
@@ -38,16 +38,31 @@ def step_span(c: Any, kind: str, X: Any, Xn: Any, ds: float) -> float:
     return float(ds) if kind in TURNING else abs(c.lam(Xn) - c.lam(X))
 
 
+#: Events at which the extended Jacobian itself is singular (a second branch through the point): the corrections
+#: that would locate them fail close to them, and their test function (a multiplier through +1 beside the trivial
+#: one) is computed only to ~sqrt(eps) there, so one left unlocated *for either reason* is no sign of a bad step
+#: and is not refined (one whose test function jumps still is: a jump to another branch).
+SINGULAR_EVENTS = ("BP", "BPC")
+
+#: :func:`locate`'s noise test: a bracket narrower than |g| / (NOISE_SPAN * the step's mean slope) holds a value that
+#: no test function steeper than NOISE_SPAN times its mean slope reaches inside it: g is noise (or a jump) there.
+NOISE_SPAN = 100.0
+
+
 def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_hi: float, *,
            tol: float = 1e-9, s_tol: float = 1e-10, max_iter: int = 30,
-           info: dict | None = None) -> tuple[float, Any, float, bool]:
+           info: dict | None = None, noise_stop: bool = False) -> tuple[float, Any, float, bool]:
     """Zero of g(s) on (0, s_hi) by the Illinois regula falsi.
 
     ``g(s)`` returns (value, payload) and may return (nan, None) on failure.  Returns (s, payload, value,
     located): located when |g| <= tol times the larger end value (when that is below 1: then s is found to about
     tol times s_hi, whatever the test function's scale), or when the bracket has shrunk below s_tol * s_hi with
     |g| below 1e-6 of its end values (a continuous root); not located when g jumps across a closed bracket, when
-    g_lo and g_hi do not bracket a zero (no evaluation then) or when the iteration budget runs out.  An end value
+    g_lo and g_hi do not bracket a zero (no evaluation then) or when the iteration budget runs out.  With
+    ``noise_stop``, also not located, and ``info["noise"]`` set, as soon as the bracket is narrower than |g| over
+    :data:`NOISE_SPAN` times the mean slope (g_hi - g_lo) / s_hi while |g| is below 1e-3 of the end values: the
+    test function has hit its noise floor (a branch point's, ~sqrt(eps)), and narrowing the bracket further, down
+    to s_tol, would not say where its zero is better than |g / slope| (the error the caller then reports).  An end value
     already within ``tol`` is returned after one evaluation there (the point on the event) when a value just
     inside the end (1e-6 s_hi) shows no sign change in the interior.  ``info``, when given, receives
     ``"bracket"``: the last (a, b) known to hold the sign change (what an unlocated result is worth).
@@ -87,6 +102,8 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
             a, ga = a + inset, gi
     side = 0
     best = (b, None, gb)
+    mean_slope = abs(float(g_hi) - float(g_lo)) / float(s_hi)
+    small = 1e-3 * max(abs(float(g_lo)), abs(float(g_hi)))
     for _ in range(max_iter):
         if ga == gb:
             s = 0.5 * (a + b)
@@ -108,6 +125,9 @@ def locate(g: Callable[[float], tuple[float, Any]], s_hi: float, g_lo: float, g_
             # jumps across the bracket (a critical eigenvalue swapping, a discontinuous model) is not: bracketed,
             # not located.
             return done(s, payload, gs, abs(gs) <= 1e-6 * max(abs(g_lo), abs(g_hi)))
+        if noise_stop and abs(gs) <= small and abs(b - a) * NOISE_SPAN * mean_slope < abs(gs):
+            info["noise"] = True
+            return done(s, payload, gs, False)
         if np.sign(gs) == np.sign(gb):
             b, gb = s, gs
             if side == -1:
@@ -175,6 +195,7 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
     # not localised: somewhere in the step
     found = Found(kind, Xn, an_n, False, math.nan, {}, lam_error=step_span(c, kind, X, Xn, ds))
     failed = []
+    info: dict = {}  # locate's report: the last bracket, and whether it stopped at the test function's noise
     if s.locate and tau is not None:
         # Every evaluation lies on the hyperplane at distance sv from X along tau; its guess comes from the
         # nearest point already on the branch, along that point's own tangent.  Next to a branch point, where the
@@ -209,8 +230,8 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
             tested[sv] = (a, c.tests(a, tl))
             return tested[sv][1][kind], (sol, a, tl)
 
-        info: dict = {}
-        sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol, info=info)
+        sv, payload, val, located = locate(g, ds, tests[kind], tests_n[kind], tol=s.locate_tol, info=info,
+                                           noise_stop=True)
         if payload is not None:  # located, or bracketed where the test function jumps (residual not small)
             sol, an, tl = payload
             found = Found(kind, sol.x, an, bool(located), float(val), {}, int(sol.iterations), sv, tl,
@@ -226,15 +247,19 @@ def bracket(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, tests
                 # where lam turns (the side branch of a pitchfork at its branch point)
                 lo, hi = info["bracket"]
                 found.lam_error = hi - lo
+                if info.get("noise") and found.slope:  # the zero of a noisy g is known to |g / slope| only
+                    found.lam_error = max(found.lam_error, abs(float(val) / found.slope))
                 found.jumped = _solution_jumps(c, [(0.0, X), (ds, Xn)] + [(k, v[0].x) for k, v in solved.items()],
                                                lo, hi)
                 before = tests if lo == 0.0 else tested.get(lo, (None, {}))[1]
                 after = an_n if hi == ds else tested.get(hi, (None, None))[0]
                 if "CRITICAL" in before and after is not None:
                     found.sides = (before["CRITICAL"], after)
-    # a branch point: the corrections failed only next to it, where the test function had all but vanished (a
-    # jump to another branch makes the test function change sign far from zero, with or without failures)
-    found.singular = (bool(failed) and not found.located and np.isfinite(found.residual)
+    # a branch point: the corrections failed only next to it, or its test function sank into its noise there,
+    # where it had all but vanished (a jump to another branch makes the test function change sign far from zero,
+    # with or without failures)
+    blocked = bool(failed) or (bool(info.get("noise")) and kind in SINGULAR_EVENTS)
+    found.singular = (blocked and not found.located and np.isfinite(found.residual)
                       and abs(found.residual) <= 1e-3 * max(abs(tests[kind]), abs(tests_n[kind])))
     if found.singular and found.slope:
         # There the test function is noise of size |residual| about its zero, resolved only to |residual / slope|

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from gfbjax.cont._localise import _bracketed_zero
+from gfbjax.cont._localise import _bracketed_zero, locate
 
 
 def counted(fn):
@@ -89,3 +89,52 @@ def test_a_narrow_bracket_is_refined_as_a_wide_one(width):
     slope = 8.0 / width * np.exp(8.0 * zero / width)
     assert len(calls) >= 1
     assert abs(lam - (2.0 * zero + 0.1)) <= 2.0 * 1.5 * tol / slope
+
+
+# ---- locate: the regula falsi that localises an event on the branch itself
+def _noisy(slope, zero, noise):
+    """A straight test function plus +-noise, random in s but repeatable (a branch point's multiplier test,
+    computed only to ~sqrt(eps) next to its zero)."""
+    def fn(s):
+        sign = np.random.default_rng(int(s * 2.0**52) % 2**32).choice([-1.0, 1.0])
+        return slope * (s - zero) * (1.0 + 10.0 * s) + noise * sign  # curved: no secant lands on the zero
+    return fn
+
+
+def _run(fn, s_hi, **kw):
+    calls, info = [], {}
+
+    def g(s):
+        calls.append(s)
+        return fn(s), s
+
+    s, _, value, located = locate(g, s_hi, fn(0.0), fn(s_hi), tol=1e-8, info=info, **kw)
+    return s, value, located, info, len(calls)
+
+
+def test_locate_stops_at_the_noise_floor_of_a_test_function():
+    """Down in its noise a test function cannot say where its zero is better than |noise / slope|, and the regula
+    falsi went on to a bracket of 1e-10 s_hi (on the Brusselator's first branch point of cycles, n = 20, three
+    attempts of 22-30 corrections each, the step halved between them).  With ``noise_stop`` it ends there, not
+    located, with the noise flagged, and the zero lies within the noise over the slope of the returned s."""
+    slope, zero, noise = 0.2, 0.0123, 3.6e-7
+    fn = _noisy(slope, zero, noise)
+    s, value, located, info, calls = _run(fn, 0.05, noise_stop=True)
+    assert not located and info.get("noise")
+    assert abs(s - zero) <= 2.0 * noise / slope + (info["bracket"][1] - info["bracket"][0])
+    assert abs(value) <= 2 * noise
+    # without it the bracket closes to 1e-10 on a value that happens to be small, which passes for a located zero
+    _, _, _, info_old, calls_old = _run(fn, 0.05)
+    assert not info_old.get("noise") and calls < calls_old, (calls, calls_old)
+
+
+@pytest.mark.parametrize("steep", [1.0, 50.0])
+def test_locate_with_noise_stop_still_locates_a_steep_smooth_zero(steep):
+    """A continuous test function whose slope at its zero is up to 50 times its mean slope over the step is located
+    as before (the noise test fires only beyond NOISE_SPAN = 100 times)."""
+    zero = 0.0311
+    k = 2.0 * steep / 0.05  # tanh(k (s - zero)) on [0, 0.05]: mean slope ~2 / 0.05, slope k at the zero
+    fn = lambda s: math.tanh(k * (s - zero))  # noqa: E731
+    s, value, located, info, _ = _run(fn, 0.05, noise_stop=True)
+    assert located and not info.get("noise") and abs(value) <= 1e-8
+    assert abs(s - zero) <= 1e-8 / k * 1.01
