@@ -241,7 +241,7 @@ def test_fresh_run_refuses_to_delete_an_unfinished_checkpoint(tmp_path, capsys):
     (ck / "step_00000.npz").write_bytes(b"kept")
     parser = register(argparse.ArgumentParser().add_subparsers())
     args = parser.parse_args(["--out", str(tmp_path)])
-    with pytest.raises(ParameterError, match=r"unfinished run \(1 accepted step.*--resume"):
+    with pytest.raises(ParameterError, match=r"unfinished 'gfbjax cycles' run \(1 accepted step.*--resume"):
         checkpoint_folder(args, tmp_path, "cycles")
     assert (ck / "step_00000.npz").read_bytes() == b"kept"
     (ck / "end.json").write_text('{"outcome": "reached_end", "message": ""}')
@@ -259,3 +259,22 @@ def test_fresh_and_resume_exclude_each_other(tmp_path):
     (tmp_path / "checkpoint").mkdir()
     (tmp_path / "cycles_args.json").write_text('{"N": 8, "nx": 16}')
     assert main(["cycles", "--resume", str(tmp_path), "--fresh"]) == 2
+
+
+def test_the_refusal_names_the_command_that_owns_the_folder(tmp_path):
+    """An unfinished 'gfbjax cycles' folder met by 'gfbjax energy': the advice is to resume it with cycles (a new
+    user's report: it said 'gfbjax energy --resume', which then failed), and energy's --resume points there too."""
+    from gfbjax.cli.commands._checkpoints import checkpoint_folder, resume_args
+    from gfbjax.cli.commands.energy import register
+    from gfbjax.params import ParameterError
+    import argparse
+
+    (tmp_path / "checkpoint").mkdir()
+    (tmp_path / "checkpoint" / "step_00000.npz").write_bytes(b"kept")
+    (tmp_path / "cycles_args.json").write_text('{"N": 8}')
+    parser = register(argparse.ArgumentParser().add_subparsers())
+    with pytest.raises(ParameterError, match=r"unfinished 'gfbjax cycles' run .*gfbjax cycles --resume"):
+        checkpoint_folder(parser.parse_args(["--out", str(tmp_path)]), tmp_path, "energy")
+    with pytest.raises(ParameterError, match=r"no energy_args.json there\); it holds a 'gfbjax cycles' run"):
+        resume_args(parser.parse_args(["--resume", str(tmp_path)]), "energy")
+    assert (tmp_path / "checkpoint" / "step_00000.npz").read_bytes() == b"kept"

@@ -224,6 +224,7 @@ def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleS
     """ValueError, before any work, when ``orbit`` does not fit ``problem`` (state count, f's output shape), and
     the checks of :func:`check_cycle_size` for its mesh."""
     n = problem.n
+    _check_orbit_shapes(orbit, "the start orbit")
     if orbit.n != n:
         raise ValueError(f"the start orbit has {orbit.n} states but problem.n = {n}")
     out = jax.eval_shape(problem.f, jax.ShapeDtypeStruct((n,), orbit.xm.dtype), orbit.lam, problem.args)
@@ -231,6 +232,24 @@ def check_cycle_inputs(problem: CycleProblem, orbit: col.Orbit, settings: CycleS
         raise ValueError(f"f(x, lam, args) returned shape {getattr(out, 'shape', type(out).__name__)} for x of "
                          f"shape ({n},); it must return ({n},)")
     check_cycle_size(problem, orbit.N, int(orbit.xi.shape[1]) + 1, settings)
+
+
+def _check_orbit_shapes(orbit: col.Orbit, what: str) -> None:
+    """ValueError naming ``what`` and the array unless mesh, xm and xi are real arrays of shapes (N+1,), (N+1, n)
+    and (N, m-1, n) (else JAX fails later, deep in a concatenation, with no name)."""
+    arrays = {"mesh": orbit.mesh, "xm": orbit.xm, "xi": orbit.xi}
+    for name, a in arrays.items():
+        dtype = getattr(a, "dtype", None)
+        if getattr(a, "shape", None) is None or dtype is None or not (
+                jnp.issubdtype(dtype, jnp.floating) or jnp.issubdtype(dtype, jnp.integer)):
+            raise ValueError(f"{what}'s {name} must be a real array, got {type(a).__name__}"
+                             + (f" of dtype {dtype}" if dtype is not None else ""))
+    mesh, xm, xi = (tuple(a.shape) for a in arrays.values())
+    ok = len(mesh) == 1 and len(xm) == 2 and len(xi) == 3
+    ok = ok and xm[0] == mesh[0] and xi[0] == mesh[0] - 1 and xi[2] == xm[1] and xi[1] >= 1
+    if not ok:
+        raise ValueError(f"{what} must have mesh (N+1,), xm (N+1, n) and xi (N, m-1, n), with N mesh intervals, m "
+                         f"collocation points and n states; got mesh {mesh}, xm {xm}, xi {xi}")
 
 
 def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, what: str) -> None:
@@ -507,9 +526,11 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
     only used for its shapes) or, if that branch had ended, returns it as stored.
 
     Returns a :class:`Branch` (points so far and the :class:`Outcome`, whatever ended the continuation).
-    Raises ``ValueError`` before any work for inputs that do not fit together (:func:`check_cycle_inputs`, a
-    linear solver the problem cannot use, a natural-parameter algorithm from a bifurcation point), and for a start
-    orbit that is not finite or at any of whose nodes f is NaN or inf (naming the node's scaled time)."""
+    Raises ``ValueError`` before any work for inputs that do not fit together (:func:`check_cycle_inputs`: the
+    start's array shapes and state count, f's output; a start of another degree than ``settings.m``; a linear
+    solver the problem cannot use; a natural-parameter algorithm from a bifurcation point), and for a start orbit
+    that is not finite or at any of whose nodes f is NaN or inf (naming the node's scaled time).  The start's own
+    mesh is kept (its N need not be ``settings.N``)."""
     if not isinstance(problem, CycleProblem):
         raise ValueError(f"problem must be a CycleProblem, got {type(problem).__name__}")
     if not isinstance(settings, CycleSettings):
@@ -520,6 +541,11 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
         raise ValueError(f"a {start.label} start leaves its bifurcation point along a direction of its own; "
                          "natural-parameter steps cannot follow it: use PseudoArclength()")
     check_cycle_inputs(problem, start.orbit, settings)
+    m_start = int(start.orbit.xi.shape[1]) + 1
+    if m_start != settings.m:  # the start's own degree would silently override the settings'
+        raise ValueError(f"the start orbit has m = {m_start} collocation points per interval (xi of shape "
+                         f"{tuple(start.orbit.xi.shape)}) but settings.m = {settings.m}: build the start with "
+                         f"m = {settings.m}, or continue with CycleSettings(m={m_start}, ...)")
     check_start(settings, start.orbit.lam, "the start's lam")
     scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1, settings.collocation)
     _check_orbit(problem, start.orbit, scheme, "the start orbit")

@@ -35,6 +35,28 @@ def test_start_orbit_and_f_must_fit_the_problem():
         continue_cycles(CycleProblem(stuart_landau, 2, jnp.asarray(W)), EquilibriumSettings(), _sl_start(st))
 
 
+def test_start_orbit_arrays_of_the_wrong_shape_or_kind_are_named():
+    """A hand-made start whose arrays do not fit together (a new user's report: JAX failed inside a concatenation
+    naming none of them), and one whose degree is not the settings' (it silently replaced settings.m)."""
+    from gfbjax.cont import CycleStart
+    from gfbjax.cont._collocation import Orbit
+
+    st = CycleSettings(m=3, N=6, max_points=2)
+    o = _sl_start(st).orbit
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    cases = [(o.mesh, o.xm[:-1], o.xi, r"xm \(6, 2\)"), (o.mesh, o.xm, o.xi[:-1], r"xi \(5, 2, 2\)"),
+             (o.mesh[:-1], o.xm, o.xi, r"mesh \(6,\)"), (o.mesh, o.xm, o.xi[:, 0], r"xi \(6, 2\)")]
+    for mesh, xm, xi, shown in cases:
+        with pytest.raises(ValueError, match=r"start orbit must have mesh \(N\+1,\), xm \(N\+1, n\).*" + shown):
+            continue_cycles(prob, st, CycleStart(Orbit(mesh, xm, xi, o.T, o.lam)))
+    with pytest.raises(ValueError, match="start orbit's xm must be a real array, got str"):
+        continue_cycles(prob, st, CycleStart(Orbit(o.mesh, "abc", o.xi, o.T, o.lam)))
+    with pytest.raises(ValueError, match="start orbit's xi must be a real array, got .* of dtype complex"):
+        continue_cycles(prob, st, CycleStart(Orbit(o.mesh, o.xm, o.xi + 0j, o.T, o.lam)))
+    with pytest.raises(ValueError, match=r"start orbit has m = 3 .* but settings.m = 4"):
+        continue_cycles(prob, CycleSettings(m=4, N=6, max_points=2), CycleStart(o))
+
+
 def test_floquet_method_must_see_past_the_trivial_multiplier():
     """Arnoldi with k = 1 would return only the trivial multiplier and call any cycle stable."""
     pattern = np.ones((2, 2), bool)

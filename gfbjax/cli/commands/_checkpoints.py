@@ -32,8 +32,8 @@ def add_checkpoint_options(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("checkpoints")
     g.add_argument("--resume", type=Path, default=None, metavar="DIR",
                    help="continue the branch of an earlier run whose --out was DIR, after its last point, with that "
-                        "run's options (other options than --quiet/--no-figures are refused); the results are "
-                        "written to DIR")
+                        "run's options (an option that differs from that run's is refused; --quiet and "
+                        "--no-figures are not kept from it: give them again); the results are written to DIR")
     g.add_argument("--fresh", action="store_true",
                    help=f"start afresh even where OUT/{FOLDER}/ holds an unfinished run (deleting it); without "
                         "this, such a folder is refused, to be continued with --resume")
@@ -66,8 +66,13 @@ def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
         raise ParameterError("--resume and --fresh exclude each other (--fresh deletes what --resume continues)")
     path = folder / f"{command}_args.json"
     if not path.is_file() or not (folder / FOLDER).is_dir():
+        owner = _owner(folder)
+        missing = " and ".join(p for p, there in ((path.name, path.is_file()), (f"{FOLDER}/", (folder / FOLDER).is_dir()))
+                               if not there)
         raise ParameterError(f"--resume {folder}: not the --out folder of a 'gfbjax {command}' run with checkpoints "
-                             f"(no {path.name} and {FOLDER}/ there)")
+                             f"(no {missing} there)"
+                             + (f"; it holds a 'gfbjax {owner}' run: gfbjax {owner} --resume {folder}"
+                                if owner not in (None, command) and (folder / FOLDER).is_dir() else ""))
     try:
         saved = json.loads(path.read_text())
     except (OSError, json.JSONDecodeError) as exc:
@@ -84,6 +89,13 @@ def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
     return merged
 
 
+def _owner(folder: Path) -> str | None:
+    """The command whose options ``folder`` holds (``<command>_args.json``; the newest where there are several), or
+    None."""
+    found = sorted(folder.glob("*_args.json"), key=lambda p: p.stat().st_mtime)
+    return found[-1].name[:-len("_args.json")] if found else None
+
+
 def checkpoint_folder(args: argparse.Namespace, out: Path, command: str) -> Path | None:
     """The checkpoint folder of this run (None with ``--no-checkpoint``); writes ``<command>_args.json``.  A fresh
     run (no ``--resume``) clears an old checkpoint in ``out``: that of a finished branch always, that of an
@@ -92,10 +104,11 @@ def checkpoint_folder(args: argparse.Namespace, out: Path, command: str) -> Path
     if getattr(args, "resume", None) is None and folder.exists():
         steps = len(list(folder.glob("step_*.npz")))
         if steps and not (folder / "end.json").exists() and not getattr(args, "fresh", False):
+            owner = command if (out / f"{command}_args.json").is_file() else _owner(out) or command
             raise ParameterError(
-                f"--out {out}: {folder} holds an unfinished run ({steps} accepted step{'s' * (steps != 1)}, no "
-                f"end recorded: killed or interrupted). Continue it with 'gfbjax {command} --resume {out}', "
-                f"start afresh with --fresh (deletes it), or choose another --out")
+                f"--out {out}: {folder} holds an unfinished 'gfbjax {owner}' run ({steps} accepted "
+                f"step{'s' * (steps != 1)}, no end recorded: killed or interrupted). Continue it with 'gfbjax "
+                f"{owner} --resume {out}', start afresh with --fresh (deletes it), or choose another --out")
         shutil.rmtree(folder)
     if args.no_checkpoint:
         return None

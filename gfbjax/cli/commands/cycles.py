@@ -32,7 +32,7 @@ cycles.json (summary: special points with speed, rpm, multipliers' moduli, NS an
 counts; timings), checkpoint/ (every point as it is accepted, for --resume), cycles_bifurcation.png (max/min of the journal y_j and x_j against speed, stable solid,
 unstable dashed, special points marked) and cycles_multipliers.png (Floquet multipliers and unit circle).
 Exit status: 0 when the branch reached --end, 1 when it ended early (everything is still written), 2 for
-invalid input.
+invalid input, 130 when interrupted (Ctrl-C or SIGTERM; continue with --resume).
 """
 
 EPILOG = """\

@@ -37,7 +37,7 @@ Writes to --out: branch.npz + branch.json (the branch with its states, gfbjax.co
 sign; the identity error; timings) and energy.png (W_fu, W_cf, W_cb against speed, stable solid, unstable dashed,
 NS points and W_cb = 0 marked).
 Exit status: 0 when the branch got to --end; 1 when it stopped short of it (the points computed are still
-written); 2 for invalid input.
+written); 2 for invalid input; 130 when interrupted (continue with --resume).
 """
 
 EPILOG = """\
@@ -81,7 +81,8 @@ def _saved_branch(args: argparse.Namespace) -> tuple[Any, Any, Any]:
                                    ("--nx", "nx"), ("--nz", "nz"), ("--start", "start"), ("--end", "end"),
                                    ("--N", "N"), ("--m", "m"), ("--ds", "ds"), ("--ds-max", "ds_max"),
                                    ("--dlam-max", "dlam_max"), ("--chord-tol", "chord_tol"),
-                                   ("--max-points", "max_points"), ("--resume", "resume"), ("--h-rub-um", "h_rub_um"),
+                                   ("--max-points", "max_points"), ("--resume", "resume"), ("--fresh", "fresh"),
+                                   ("--h-rub-um", "h_rub_um"),
                                    ("--on-contact", "on_contact"))
              if getattr(args, dest, None) != args.option_default(dest)]
     if given:

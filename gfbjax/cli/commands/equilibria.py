@@ -28,7 +28,8 @@ system spec, grid, units and rpm conversion), equilibria.json
 (the Hopf/fold points: Omega_bar, rpm, the Hopf frequency omega per tau and in Hz and the whirl ratio
 omega/Omega_bar; why the branch ended; timings) and equilibria.png (journal position and the real part of the
 critical eigenvalue against speed).
-Exit status: 0 when the branch reached --end, 1 when it ended early, 2 for invalid input.
+Exit status: 0 when the branch reached --end, 1 when it ended early, 2 for invalid input, 130 when interrupted
+(continue with --resume).
 """
 
 EPILOG = """\
