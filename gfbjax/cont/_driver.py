@@ -410,8 +410,6 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
 
 
-
-
 def _unexplained(c: Curve, tests: dict | None, tests_n: dict, detect: tuple = (), found: list = (),
                  start_reported: bool = True) -> int:
     """How many more eigenvalues (multipliers) crossed into or out of the unstable side over the step than the

@@ -67,8 +67,8 @@ def resume_args(args: argparse.Namespace, command: str) -> argparse.Namespace:
     path = folder / f"{command}_args.json"
     if not path.is_file() or not (folder / FOLDER).is_dir():
         owner = _owner(folder)
-        missing = " and ".join(p for p, there in ((path.name, path.is_file()), (f"{FOLDER}/", (folder / FOLDER).is_dir()))
-                               if not there)
+        missing = " and ".join(name for name, there in ((path.name, path.is_file()),
+                                                        (f"{FOLDER}/", (folder / FOLDER).is_dir())) if not there)
         raise ParameterError(f"--resume {folder}: not the --out folder of a 'gfbjax {command}' run with checkpoints "
                              f"(no {missing} there)"
                              + (f"; it holds a 'gfbjax {owner}' run: gfbjax {owner} --resume {folder}"
