@@ -26,13 +26,10 @@ def strong(v: Any) -> Any:
         return v
     if isinstance(v, (int, float, np.integer, np.floating)):
         return jnp.asarray(v, dtype=jnp.result_type(float))
-    if isinstance(v, (np.ndarray, jax.Array)) and v.ndim == 0 and (
-            jnp.issubdtype(v.dtype, jnp.integer) or jnp.issubdtype(v.dtype, jnp.floating)):
+    if isinstance(v, (np.ndarray, jax.Array)) and v.ndim == 0:
         # any real 0-d array (np.array(3) as np.load gives it, jnp.int32, jnp.float32, a weak array) becomes the
         # float of the computation: the corrector's loop carries that type and refuses another
-        dtype = jnp.result_type(float)
-        if v.dtype != dtype or getattr(v, "weak_type", False):
-            return jnp.asarray(v, dtype=dtype)
+        return float_array(v)
     return v
 
 
