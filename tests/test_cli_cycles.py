@@ -134,11 +134,32 @@ def test_equilibria_bad_hopf_cycles_exits_2(tmp_path, capsys):
     assert code == 2 and "--hopf-cycles" in err
 
 
+def _bar_after(calls, restored=0, t_first=None):
+    """A disabled speed bar that has seen the rows ``calls`` (indices), its first computed one at ``t_first``."""
+    from gfbjax.cli.commands.cycles import _SpeedBar
+
+    bar = _SpeedBar(0.1, 0.5, False, restored)
+    for i in calls:
+        bar(i, None)
+    bar.t_first = t_first if bar.computed else None
+    return bar
+
+
 def test_summary_time_keeps_the_compilation_out_of_the_per_point_figure():
     from gfbjax.cli.commands.cycles import _time_split
 
     # 10 s of continuation, the first point after 7 s (compilation), 4 points: 1 s for each later point
-    assert _time_split(10.0, 100.0, 107.0, 4) == " (first point 7.0 s, compilation included; then 1.00 s per point)"
-    assert _time_split(10.0, 100.0, 107.0, 1) == " (10.00 s per point)"
-    assert _time_split(10.0, 100.0, None, 4) == " (2.50 s per point)"
-    assert _time_split(10.0, 100.0, None, 0) == ""
+    assert (_time_split(10.0, 100.0, _bar_after(range(4), t_first=107.0))
+            == " (first point 7.0 s, compilation included; then 1.00 s per point)")
+    assert _time_split(10.0, 100.0, _bar_after([0], t_first=107.0)) == " (10.00 s per point)"
+    assert _time_split(10.0, 100.0, _bar_after([])) == ""
+
+
+def test_summary_time_of_a_resumed_run_counts_only_its_own_points():
+    from gfbjax.cli.commands.cycles import _time_split
+
+    # 12 rows restored: the first callback is the checkpoint's last row (index 11), then 4 new rows
+    assert (_time_split(10.0, 100.0, _bar_after(range(11, 16), restored=12, t_first=107.0))
+            == " (resumed after 12 rows; first point 7.0 s, compilation included; then 1.00 s per point)")
+    # a finished branch read back: nothing computed, no per-point figure
+    assert _time_split(0.5, 100.0, _bar_after([], restored=30)) == " (resumed after 30 rows; no new point)"

@@ -1,6 +1,7 @@
 """Fault test of the checkpoints: ``kill -9`` of ``gfbjax cycles`` and then ``--resume`` loses no point beyond the
 one in progress, and the final branch equals an uninterrupted run's (issue: long runs that lose nothing)."""
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -52,6 +53,9 @@ def test_kill_9_then_resume_equals_uninterrupted(tmp_path, env):
     out, _ = resumed.communicate(timeout=900)
     assert resumed.returncode == 0, out
     assert "resuming" in out
+    # its time line counts only the points it computed, after the rows the killed run had written
+    resumed_after = re.search(r"resumed after (\d+) rows; first point", out)
+    assert resumed_after and written <= int(resumed_after.group(1)) < len(ref), out
     got = Branch.load(run / "branch")
     assert got.outcome is ref.outcome and len(got) == len(ref)
     for key in ("lam", "period", "l2", "xmax", "xmin", "trivial_error", "tangent_lam"):

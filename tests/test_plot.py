@@ -31,8 +31,9 @@ def _close_figures():
 # -- hand-made results -------------------------------------------------------------------------------------------
 
 
-def cycles(shift: float = 0.0) -> Branch:
-    """9 cycles, unstable from the NS point (row 4, located) on; a PD only bracketed (unlocated); row 2 flagged."""
+def cycles(shift: float = 0.0, ns_row: int = 4) -> Branch:
+    """9 cycles, unstable from the NS point (row 4, located) on; a PD only bracketed (unlocated); row 2 flagged.
+    ``ns_row``: where the NS point is drawn (8: at the right edge of the speed range)."""
     lams = np.linspace(0.30, 0.50, 9)
     pts = []
     for i, lam in enumerate(lams):
@@ -41,7 +42,7 @@ def cycles(shift: float = 0.0) -> Branch:
         pts.append(PointRecord(lam=lam, period=2 * math.pi / lam, l2=0.5, xmax=np.array([0.2, -0.4]) + shift + 0.02 * i,
                                xmin=np.array([-0.2, -0.7]) + shift - 0.02 * i, multipliers=mu, stable=r < 1.0,
                                trivial_error=0.5 if i == 2 else 1e-4, newton_iterations=3, ds=0.02, tangent_lam=1.0))
-    special = [SpecialPoint("NS", lam=float(lams[4]), index=4, spectrum=pts[4].multipliers, located=True),
+    special = [SpecialPoint("NS", lam=float(lams[ns_row]), index=ns_row, spectrum=pts[ns_row].multipliers, located=True),
                SpecialPoint("PD", lam=0.47, index=8, spectrum=pts[8].multipliers, located=False)]
     return Branch.from_points("cycles", [0, 1], pts, special, [], Outcome.REACHED_END, m=3, accuracy_tol=0.1)
 
@@ -270,3 +271,16 @@ def test_bad_branch_collections():
         pb.plot_bifurcation({})
     with pytest.raises(TypeError, match="label"):
         pb.plot_bifurcation([cycles(), cycles()])
+
+
+@pytest.mark.parametrize("draw", [lambda b: pb.plot_bifurcation(b),
+                                  lambda b: pb.plot_energy([("A", b, energy(b))])])
+def test_special_point_labels_stay_inside_the_axes(draw):
+    """A new user's report: the NS label at the right end of a branch was cut off by the axes' edge."""
+    fig = draw(cycles(ns_row=8))  # as a branch run downwards in speed from just above its NS point
+    fig.canvas.draw()
+    labels = [t for a in fig.axes for t in a.texts if t.get_text().startswith("NS")]
+    assert labels
+    for t in labels:
+        box, frame = t.get_window_extent(), t.axes.get_window_extent()
+        assert frame.x0 <= box.x0 and box.x1 <= frame.x1, (t.get_text(), box, frame)

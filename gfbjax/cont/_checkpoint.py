@@ -145,6 +145,18 @@ class Checkpoint:
             restored.outcome, restored.message = Outcome(d["outcome"]), d["message"]
         return restored
 
+    def stored_rows(self) -> int:
+        """How many rows of a branch the folder holds (0 without steps): where a resumed run starts.  Reads only
+        the steps' row lists; an unreadable step ends the count (:meth:`open` then names it)."""
+        n = 0
+        for path in self._steps():
+            try:
+                with np.load(path, allow_pickle=False) as z:
+                    n += len(json.loads(str(z["rows"])))
+            except Exception:
+                break
+        return n
+
     def _read(self, steps: list[Path]) -> Restored:
         points: list[PointRecord] = []
         special: list[SpecialPoint] = []

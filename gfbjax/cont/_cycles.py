@@ -273,6 +273,17 @@ def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, wh
                          np.concatenate([mesh, inner, t_points]), mesh, float(orbit.lam), problem.args, what)
 
 
+def _check_moves(orbit: col.Orbit, what: str) -> None:
+    """ValueError when ``orbit``, a guess to correct, is constant: a constant orbit is an equilibrium with any
+    period, and as its own phase reference it makes the phase condition (the integral of x . x_ref') vanish;
+    Newton's matrix is singular and the correction would end "nonfinite" or "diverged" without saying why."""
+    nodes = np.concatenate([np.asarray(orbit.xm), np.asarray(orbit.xi).reshape(-1, orbit.n)])
+    if np.max(np.ptp(nodes, axis=0)) <= 1e-14 * (1.0 + np.max(np.abs(nodes))):
+        raise ValueError(f"{what} is constant (every node equals xm[0]): a cycle needs a guess that moves; start "
+                         "from a Hopf point (start_from_hopf), a period-doubling point (start_from_pd), a branch "
+                         "(start_from_branch) or samples of a time integration (start_from_samples)")
+
+
 def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint | None = None, *,
                   settings: CycleSettings | None = None) -> tuple[Any, Linearisation | None]:
     """Correct one orbit with the linear solver and Newton tolerances of ``settings`` (default
@@ -298,6 +309,7 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     check_cycle_inputs(problem, orbit, s)
     scheme = col.Scheme(int(orbit.xi.shape[1]) + 1, s.collocation)
     _check_orbit(problem, orbit, scheme, "the orbit")
+    _check_moves(orbit, "the orbit")
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
 
@@ -549,6 +561,8 @@ def continue_cycles(problem: CycleProblem, settings: CycleSettings, start: Cycle
     check_start(settings, start.orbit.lam, "the start's lam")
     scheme = col.Scheme(int(start.orbit.xi.shape[1]) + 1, settings.collocation)
     _check_orbit(problem, start.orbit, scheme, "the start orbit")
+    if start.tangent is None:  # a Hopf start is the constant equilibrium with the first harmonic as tangent
+        _check_moves(start.orbit, "the start orbit (a guess without a tangent)")
     curve = CycleCurve(problem, settings, scheme, np.asarray(start.orbit.mesh))
     ck = as_checkpoint(checkpoint, n=problem.n, start=start.label,
                        problem=fingerprint(problem.f, problem.args, problem.n_trivial),

@@ -179,13 +179,20 @@ class _Run:
         self.points: list[PointRecord] = []
         self.special: list[SpecialPoint] = []
         self.special_states: list[dict[str, np.ndarray]] = []
+        self.reported = 0  # rows the callback and the bar have seen
 
     def add_point(self, rec: PointRecord) -> bool:
-        """Record an accepted point and call the callback; False when the callback asks to stop."""
+        """Record an accepted point and report every row not reported yet (a row inserted at a located special
+        point comes before the step's point) to the bar and the callback; False when the callback asks to stop."""
         self.points.append(rec)
-        if self.bar is not None:
-            self.bar.update(1)
-        return not (self.callback is not None and self.callback(len(self.points) - 1, rec) is False)
+        while self.reported < len(self.points):
+            i = self.reported
+            self.reported += 1
+            if self.bar is not None:
+                self.bar.update(1)
+            if self.callback is not None and self.callback(i, self.points[i]) is False:
+                return False
+        return True
 
     def accept(self, rec: PointRecord, X: Any, X_prev: Any, tau: Any, tests: dict | None, ds: float,
                driver: dict | None = None) -> bool:
@@ -213,7 +220,8 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
     and ``direction`` chooses between the two halves of the branch (+1: along the null tangent oriented with its
     largest component positive).  Otherwise ``X0`` is a bifurcation point (Hopf, PD) and ``tau0``
     the direction of the emanating branch (``X0`` itself is not recorded).  ``callback(index, record)`` is called
-    after each accepted point (return ``False`` to stop).
+    for each row of the branch as it is recorded, in order, rows inserted at located special points included
+    (return ``False`` to stop).
 
     ``checkpoint``: every accepted step is appended to this folder (:mod:`._checkpoint`).  If it already holds
     steps of the same continuation, the branch resumes after the last one (``X0``/``tau0`` are then not used, and
@@ -250,6 +258,7 @@ def _resume(run: _Run, restored: Any) -> tuple[Any, Any, Any, Any, float] | None
     c = run.curve
     run.special, run.special_states = list(restored.special), list(restored.special_states)
     run.points = list(restored.points[:-1])
+    run.reported = len(run.points)
     if run.bar is not None:
         run.bar.update(len(run.points))
     if not run.add_point(restored.points[-1]):

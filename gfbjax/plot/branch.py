@@ -86,6 +86,16 @@ def _mark_special(ax, s: Any, ys: Sequence[float], label: str | None = None, ms:
         label = None
 
 
+def _label_inside(ax: Any, text: str, x: float, y: float, color: Any, dy: float = 8) -> None:
+    """Label a point on the side that faces the middle of what is drawn so far: a special point in the right
+    fifth of the speed range (where a branch run downwards in speed often has its Neimark-Sacker point) is
+    labelled to its left, so that the text is not cut off by the axes' edge."""
+    x0, x1 = ax.dataLim.intervalx
+    left = bool(np.isfinite(x0) and np.isfinite(x1) and x1 > x0 and x > x0 + 0.8 * (x1 - x0))
+    ax.annotate(text, (x, y), textcoords="offset points", xytext=(-6 if left else 6, dy), fontsize=8, color=color,
+                ha="right" if left else "left")
+
+
 def _special_text(s: Any) -> str:
     # the estimated error where it reaches the printed digits: a location is no more certain than that
     err = getattr(s, "lam_error", math.nan)
@@ -155,8 +165,7 @@ def plot_bifurcation(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"),
                 ys = [float(np.asarray(arr)[row, k]) for arr in (b.xmax, b.xmin)]
                 _mark_special(a, s, ys, label=key if key not in seen else None)
                 seen.add(key)
-                a.annotate(_special_text(s), (s.lam, ys[0]), textcoords="offset points", xytext=(6, 8), fontsize=8,
-                           color=SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
+                _label_inside(a, _special_text(s), s.lam, ys[0], SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
         a.set_ylabel(label + (f"  (c = {c_um:.1f} um)" if c_um else ""))
         a.grid(alpha=0.3)
     if several:
@@ -253,9 +262,8 @@ def plot_equilibria(branch: Branches, *, names: Sequence[str] = ("x_j", "y_j"), 
                 continue
             lab = (f"{blabel}: " if several else "") + _special_text(s)
             _mark_special(axes[0], s, [float(np.asarray(b.xmax)[row, k]) for k in columns], ms=10)
-            axes[0].annotate(_special_text(s), (s.lam, float(np.asarray(b.xmax)[row, columns[-1]])),
-                             textcoords="offset points", xytext=(6, 8), fontsize=8,
-                             color=SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
+            _label_inside(axes[0], _special_text(s), s.lam, float(np.asarray(b.xmax)[row, columns[-1]]),
+                          SPECIAL_STYLE.get(s.type, ("o", "k"))[1])
             _mark_special(axes[1], s, [float(re[row])], label=lab, ms=10)
     if several:
         _style_legend(axes[0])
@@ -314,8 +322,7 @@ def plot_energy(branches: Any, *, overlay: bool = False, quantities: Sequence[st
             _overlay_legend(a, label, colour)
         for s in b.special_of("NS"):
             a.axvline(s.lam, color=SPECIAL_STYLE["NS"][1], ls=":", lw=1.2)
-            a.annotate(f"NS {s.lam:.4f}", (s.lam, 0.0), textcoords="offset points",
-                       xytext=(4, 10), fontsize=8, color=SPECIAL_STYLE["NS"][1])
+            _label_inside(a, f"NS {s.lam:.4f}", s.lam, 0.0, SPECIAL_STYLE["NS"][1], dy=10)
         for c in sign_changes(lam, E.W_cb):
             a.plot(c["Omega_bar"], 0.0, "o", mfc="none", mec=colour if overlay else "tab:red", ms=8)
         if not overlay:

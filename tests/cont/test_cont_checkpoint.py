@@ -16,7 +16,7 @@ CY = CycleSettings(m=4, N=10, ds=0.05, ds_max=0.2, max_points=14, lam_min=-0.4, 
 
 
 def _interrupt_at(k):
-    """A callback that interrupts at the first point with index >= k (rows inserted at events are not seen)."""
+    """A callback that interrupts at the first row with index >= k."""
     def cb(i, rec):
         if i >= k:
             raise KeyboardInterrupt

@@ -1,6 +1,7 @@
 """Inputs that do not fit together are refused before any work, with the field named; a numerical failure of the
 linear algebra ends a branch with its points kept; a bug in user code propagates."""
 import dataclasses
+from types import SimpleNamespace
 
 import jax.numpy as jnp
 import numpy as np
@@ -55,6 +56,28 @@ def test_start_orbit_arrays_of_the_wrong_shape_or_kind_are_named():
         continue_cycles(prob, st, CycleStart(Orbit(o.mesh, o.xm, o.xi + 0j, o.T, o.lam)))
     with pytest.raises(ValueError, match=r"start orbit has m = 3 .* but settings.m = 4"):
         continue_cycles(prob, CycleSettings(m=4, N=6, max_points=2), CycleStart(o))
+
+
+
+def test_a_constant_guess_is_refused_naming_why():
+    """A new user's all-zero start orbit ended "start point did not converge (nonfinite)" with no reason: a
+    constant orbit is an equilibrium with any period, and as its own phase reference it makes the phase condition
+    vanish (Newton's matrix is singular).  A Hopf start (constant, with the first harmonic as tangent) is allowed."""
+    from gfbjax.cont import CycleStart, correct_cycle, natural_constraint, start_from_hopf
+    from gfbjax.cont._collocation import Orbit
+
+    st = CycleSettings(m=3, N=6, max_points=2)
+    o = _sl_start(st).orbit
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    for c in (0.0, 0.3):
+        flat = Orbit(o.mesh, 0 * o.xm + c, 0 * o.xi + c, o.T, o.lam)
+        with pytest.raises(ValueError, match=r"start orbit \(a guess without a tangent\) is constant .*start_from_hopf"):
+            continue_cycles(prob, st, CycleStart(flat))
+        for con in (None, natural_constraint(o, o.lam)):
+            with pytest.raises(ValueError, match=r"the orbit is constant"):
+                correct_cycle(prob, flat, con, settings=st)
+    hopf = SimpleNamespace(lam=0.0, x=np.zeros(2), omega=float(W), v=np.array([1.0, -1.0j]))
+    assert len(continue_cycles(prob, st, start_from_hopf(hopf, st))) == 2
 
 
 def test_floquet_method_must_see_past_the_trivial_multiplier():

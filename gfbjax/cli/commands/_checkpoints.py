@@ -18,8 +18,8 @@ from typing import Any, Callable, NamedTuple
 
 from ...params import ParameterError
 
-__all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interrupted_status", "prepare_run", "Run",
-           "FOLDER"]
+__all__ = ["add_checkpoint_options", "resume_args", "checkpoint_folder", "interrupted_status", "restored_rows",
+           "prepare_run", "Run", "FOLDER"]
 
 FOLDER = "checkpoint"
 
@@ -114,6 +114,14 @@ def checkpoint_folder(args: argparse.Namespace, out: Path, command: str) -> Path
         return None
     (out / f"{command}_args.json").write_text(json.dumps(_saved(args), indent=1) + "\n")
     return folder
+
+
+def restored_rows(folder: Path | None) -> int:
+    """Rows that a run with checkpoint ``folder`` restores before computing (0 for a fresh run, which has cleared
+    the folder, and with ``--no-checkpoint``)."""
+    from ...cont import Checkpoint
+
+    return 0 if folder is None or not folder.exists() else Checkpoint(folder).stored_rows()
 
 
 def interrupted_status(branch: Any, reached: bool, out: Path, folder: Path | None, command: str) -> int:

@@ -12,7 +12,7 @@ from typing import Any
 
 from ... import limits
 from ...params import ParameterError
-from ._checkpoints import add_checkpoint_options, interrupted_status, prepare_run
+from ._checkpoints import add_checkpoint_options, interrupted_status, prepare_run, restored_rows
 from ._contact import accuracy_line, accuracy_summary, add_contact_options, contact_line, contact_summary
 from ._common import (add_speed_option, add_step_options, add_system_options, branch_row_um, check_chord_tol,
                       check_continuation_options, check_option, check_range, speed_si, write_summary)
@@ -186,9 +186,12 @@ def format_table(rows: list[dict[str, Any]]) -> str:
 class _SpeedBar:
     """tqdm progress bar advancing with Omega_bar (callback of the continuation)."""
 
-    def __init__(self, start: float, end: float, enabled: bool) -> None:
+    def __init__(self, start: float, end: float, enabled: bool, restored: int = 0) -> None:
         self.start, self.end = start, end
         self.bar = None
+        # restored > 0 (a resumed run): the first call is the checkpoint's last row, computed by an earlier run
+        self.restored = restored
+        self.computed = 0  # rows computed by this run
         self.done = 0.0
         if enabled:
             try:
@@ -204,8 +207,10 @@ class _SpeedBar:
         self.t_first: float | None = None  # perf_counter() at the first point (compilation and start included)
 
     def __call__(self, index: int, rec: Any) -> None:
-        if self.t_first is None:
-            self.t_first = time.perf_counter()
+        if index >= self.restored:
+            self.computed += 1
+            if self.t_first is None:
+                self.t_first = time.perf_counter()
         if self.bar is None:
             return None
         if self.first:  # rates and ETAs count from the first point, after the compilation
@@ -227,15 +232,19 @@ class _SpeedBar:
             self.bar.close()
 
 
-def _time_split(t_cont: float, t_start: float, t_first: float | None, points: int) -> str:
-    """The continuation's time split at its first point, which carries the compilation (and the start's
-    correction): a per-point figure over all points would charge the compilation to every point."""
-    if not points:
-        return ""
-    if t_first is None or points < 2:
-        return f" ({t_cont / points:.2f} s per point)"
+def _time_split(t_cont: float, t_start: float, bar: _SpeedBar) -> str:
+    """The continuation's time split at the first point this run computed, which carries the compilation (and
+    the start's correction): a per-point figure over all points would charge the compilation to every point, and
+    one over the rows of a resumed run would count rows an earlier run computed."""
+    points, t_first = bar.computed, bar.t_first
+    resumed = f"resumed after {bar.restored} rows; " if bar.restored else ""
+    if not points or t_first is None:
+        return f" ({resumed}no new point)" if bar.restored else ""
+    if points < 2:
+        return f" ({resumed}{t_cont / points:.2f} s per point)"
     first = t_first - t_start
-    return f" (first point {first:.1f} s, compilation included; then {(t_cont - first) / (points - 1):.2f} s per point)"
+    return (f" ({resumed}first point {first:.1f} s, compilation included; then {(t_cont - first) / (points - 1):.2f} s "
+            "per point)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -250,7 +259,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"gfbjax cycles: system '{args.system}', grid Nx={spec.Nx} Nz={spec.Nz}, collocation N={settings.N} "
           f"m={settings.m}, Omega_bar {args.start:g} -> {args.end:g}"
           + (f", resuming {ck}" if args.resume is not None else ""), flush=True)
-    bar = _SpeedBar(args.start, args.end, not args.quiet)
+    bar = _SpeedBar(args.start, args.end, not args.quiet, restored_rows(ck))
     t1 = time.perf_counter()
     try:
         branch = continue_gfb_cycles(params, args.start, args.end, settings, callback=bar, spec=spec,
@@ -271,7 +280,7 @@ def run(args: argparse.Namespace) -> int:
         f"Omega_bar {float(branch.lam[0]) if len(branch) else math.nan:.4f} -> "
         f"{float(branch.lam[-1]) if len(branch) else math.nan:.4f}",
         f"  ended             {branch.outcome}: {branch.message}" + ("" if ok else "  (before the end of the range)"),
-        f"  time              continuation {t_cont:.1f} s" + _time_split(t_cont, t1, bar.t_first, len(branch)),
+        f"  time              continuation {t_cont:.1f} s" + _time_split(t_cont, t1, bar),
         format_table(rows),
     ]
     if len(branch) and branch.monitor is not None:
