@@ -92,7 +92,10 @@ class SpecialPoint:
     point.  Not located with a finite residual: the sign change was bracketed to the step tolerance but the test
     function jumps there (its value is the residual): the location is good; omega (angle) is that of the pair that
     changed side across the bracket where the eigenvalues (multipliers) on its two sides match confidently, else
-    that of the pair nearest the boundary at the point, and the other data are the point's.  Not
+    that of the pair nearest the boundary at the point, and the other data are the point's.  That is the side
+    the run reached second: a run in the other direction reports the other side's omega (angle), and the two
+    differ by that value's change across the bracket (a new user saw a bracketed Hopf's frequency change with
+    the run's direction; within the bracket neither value is more right).  Not
     located with a NaN residual: not localised at all; ``index`` then refers to the first point past the event.
     A bracketed BP deserves suspicion: the branch-point test also flips when the corrector jumps from one branch
     to a nearby one (an imperfect bifurcation with a large step), and then the points past it lie on the other
