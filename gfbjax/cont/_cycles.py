@@ -458,7 +458,7 @@ class CycleCurve(Curve):
     def from_state(self, state):
         return col.Orbit(*(jnp.asarray(state[k], float) for k in ("mesh", "xm", "xi", "T", "lam")))
 
-    def special(self, kind, X, an, located=True):
+    def special(self, kind, X, an, located=True, ends=None):
         c = classify(kind, an["spectrum"], self.problem.n_trivial)
         return None if c is None else {"period": float(X.T), **c}
 

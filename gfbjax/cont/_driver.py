@@ -124,10 +124,12 @@ class Curve(abc.ABC):
         return X, tau, X_prev, tests
 
     @abc.abstractmethod
-    def special(self, kind: str, X: Any, analysis: dict[str, Any], located: bool = True) -> dict[str, Any] | None:
+    def special(self, kind: str, X: Any, analysis: dict[str, Any], located: bool = True,
+                ends: tuple[dict, dict] | None = None) -> dict[str, Any] | None:
         """Type-specific fields of a special point (``period``, ``angle``, ``omega``), or None when the sign change
         of the test function is not a bifurcation (e.g. two real multipliers with product 1 for NS); ``located``
-        False: X is the first point past the event, not the event itself."""
+        False: X is the first point past the event, not the event itself.  ``ends``: the test functions at the
+        step's two ends, where known (what "small" means for a test value at X: relative to its values there)."""
 
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None

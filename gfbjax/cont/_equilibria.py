@@ -24,6 +24,7 @@ Eigenvalues of :math:`f_x` are computed at every point.  Test functions:
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import partial
 from typing import Any, Callable, NamedTuple, Optional
@@ -110,6 +111,20 @@ def _unstable(z: np.ndarray) -> np.ndarray:
     return z.real > 0.0
 
 
+def _in_units(ev: np.ndarray, *others: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``ev`` (and ``others``) in units of the spectral radius of ``ev`` where that is below 1, else as they are.
+
+    The classifications below (real or complex, on the axis or off it) compare with a floor of 1 (``max(1, |z|)``)
+    so that rounding in eigenvalues near 0 is not read as an imaginary part.  For a system whose rates are all
+    slow (time in units far longer than its own scale: x' = 1e-8 (...)), that floor is far above every
+    eigenvalue: a Hopf pair with imaginary part 1e-8 counted as real and was reported as two BPs.  In these units
+    the floor is the spectral radius; systems with a radius of 1 or more are unchanged (the factor is exactly 1)."""
+    ev = np.asarray(ev, complex)
+    rho = float(np.max(np.abs(ev), initial=0.0))
+    u = 1.0 / rho if 0.0 < rho < 1.0 else 1.0
+    return (ev * u,) + tuple(np.asarray(o, complex) * u for o in others)
+
+
 def _from_axis(z: np.ndarray) -> np.ndarray:
     """Relative distance of eigenvalues from the imaginary axis (the matching's boundary test)."""
     return np.abs(z.real) / np.maximum(1.0, np.abs(z))
@@ -174,8 +189,7 @@ class EquilibriumCurve(Curve):
     def tests(self, an, tangent_lam):
         out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"],
                "UNSTABLE": float(np.sum(np.real(an["spectrum"]) > 0.0)),
-               "BOUNDARY": float(np.sum(np.abs(np.real(an["spectrum"])) <= ON_BOUNDARY
-                                        * np.maximum(1.0, np.abs(an["spectrum"])))),
+               "BOUNDARY": float(np.sum(_from_axis(*_in_units(an["spectrum"])) <= ON_BOUNDARY)),
                "CRITICAL": critical(an["spectrum"], lambda z: np.abs(z.real))}
         if self.monitor is not None:
             out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
@@ -185,14 +199,18 @@ class EquilibriumCurve(Curve):
         """``count`` crossings named from the eigenvalues that crossed the imaginary axis since ``before``
         (matched), then those nearest it: a complex pair a HOPF (two crossings, with its own omega), a real one a
         BP."""
-        ev = an["spectrum"]
-        crossed = [] if before is None else crossed_members(before, ev, _unstable, _from_axis)
-        return [(k, {"omega": abs(z.imag)} if k == "HOPF" else {})
-                for k, z in _name_crossings(ev, count, lambda z: abs(z.real), "HOPF", lambda z: "BP", crossed)]
+        ev = np.asarray(an["spectrum"], complex)
+        unit = _in_units(ev)[0]
+        crossed = [] if before is None else crossed_members(*_in_units(ev, before)[::-1], _unstable, _from_axis)
+        # omega in the problem's time: the named member's index in the spectrum, not its value in other units
+        names = _name_crossings(unit, count, lambda z: abs(z.real), "HOPF", lambda z: "BP", crossed)
+        return [(k, {"omega": abs(ev[int(np.argmin(np.abs(unit - z)))].imag)} if k == "HOPF" else {})
+                for k, z in names]
 
     def crossings(self, before, after):
         """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""
-        return matched_crossings(before, after, _unstable, _from_axis)
+        a, b = _in_units(after, before)
+        return matched_crossings(b, a, _unstable, _from_axis)
 
     def events(self, prev, cur, kinds):
         found = sign_changes(prev, cur, kinds)
@@ -217,22 +235,37 @@ class EquilibriumCurve(Curve):
     def from_state(self, state):
         return np.append(np.asarray(state["x"], float), float(state["lam"]))
 
-    def special(self, kind, y, an, located=True):
-        if kind == "FOLD" and abs(an["bp"]) <= 1e-6:
+    def special(self, kind, y, an, located=True, ends=None):
+        if kind == "FOLD" and ends is not None and _at_branch_point(an["bp"], ends):
             return None  # the lam-component of the tangent also vanishes at a branch point: reported as BP
         if kind != "HOPF":
             return {}
         ev = an["spectrum"]
+        unit = _in_units(ev)[0]
         f, i, j = _hopf_factors(ev)
         # At a located point the crossing pair has the (near) zero factor.  At an unlocated one (the point after
         # the crossing) a slow pair far from the axis in relative terms can have a smaller normalised factor than
         # the pair that just crossed, so there the pair with the smallest sum |mu_i + mu_j| is taken.
         k = int(np.argmin(np.abs(f) if located else np.abs(ev[i] + ev[j])))
-        a, b = ev[i[k]], ev[j[k]]
+        a, b = unit[i[k]], unit[j[k]]
         if not (abs(a.imag) > IMAG_TOL * max(1.0, abs(a)) and abs(a - np.conj(b)) <= 1e-6 * max(1.0, abs(a))):
             return None  # a real pair +-kappa (neutral saddle): no Hopf bifurcation
-        omega = float(abs(a.imag))
+        omega = float(abs(ev[i[k]].imag))
         return {"omega": omega, "period": 2 * np.pi / omega}
+
+
+#: a fold located where the branch-point test is below this fraction of its larger value at the step's ends lies
+#: at a branch point (the curve turning there is the side branch leaving it)
+BP_DIP = 1e-3
+
+
+def _at_branch_point(bp: float, ends: tuple[dict, dict]) -> bool:
+    """Whether the branch-point test ``bp`` at a located fold dips to zero against its values at the step's ends.
+    Relative, not absolute: the test is the smallest singular value of the augmented Jacobian (signed), which a
+    slow mode keeps small all along a branch (z' = -1e-7 z beside a fold made every fold a "BP" with an absolute
+    threshold of 1e-6), while at a branch point it vanishes between ends where it does not."""
+    scale = max(abs(float(e.get("BP", math.nan))) for e in ends)
+    return bool(np.isfinite(scale) and abs(bp) <= BP_DIP * scale)
 
 
 def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettings, x0: Any, lam0: float,

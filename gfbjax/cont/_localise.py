@@ -170,7 +170,7 @@ def localise(run: Any, kind: str, X: Any, tau: Any, ds: float, tests: dict, test
     """Localise ``kind`` between X (left) and Xn; None when the sign change is no bifurcation (the curve's
     :meth:`Curve.special` says so, e.g. a real collision of multipliers)."""
     found = bracket(run, kind, X, tau, ds, tests, tests_n, Xn, an_n)
-    extra = run.curve.special(kind, found.point, found.analysis, found.located)
+    extra = run.curve.special(kind, found.point, found.analysis, found.located, ends=(tests, tests_n))
     if extra is None:
         return None
     if found.sides is not None and any(k in extra for k in ("omega", "angle")):

@@ -474,3 +474,49 @@ def test_a_bracketed_torus_carries_the_angle_of_the_pair_that_crossed():
         assert abs(s.lam - (0.3 + 0.01 * k)) <= max(s.lam_error, 1e-9)
         # the angles differ by 1.26; the collocation's own error in them is 1.1e-6 (N = 12)
         assert s.angle == pytest.approx(2 * np.pi * (w[k] % 1.0), abs=1e-5)
+
+
+@pytest.mark.parametrize("k", [1e-5, 1e-7, 1e-10])
+def test_a_fold_beside_a_slow_mode_is_a_fold(k):
+    """x' = lam - x^2 (fold at lam = 0) beside a decoupled slow mode z' = -k z (a new user's audit: with k <= 1e-6
+    the fold was dropped as "at a branch point" by an absolute threshold on the branch-point test, which the slow
+    mode keeps at about k all along the branch, and the crossing was reported as an unlocated BP 2.7e-4 away with
+    an error bar of 2.7e-4)."""
+    def f(u, lam, args):
+        return jnp.array([lam - u[0] ** 2, -u[1] + u[0], -k * u[2]])
+
+    br = continue_equilibria(EquilibriumProblem(f, 3), EquilibriumSettings(ds=0.1, max_points=40, direction=-1,
+                                                                           lam_max=1.0), [1.0, 1.0, 0.0], 1.0)
+    assert [s.type for s in br.special] == ["FOLD"], br.special
+    fold = br.special[0]
+    assert fold.located and abs(fold.lam) <= max(fold.lam_error, 1e-12)
+
+
+def test_a_fold_on_a_slow_time_scale_is_a_fold():
+    """x' = s (lam - x^2) with s = 3e-7 (every rate small): the fold at lam = 0, located."""
+    def f(u, lam, args):
+        return jnp.array([3e-7 * (lam - u[0] ** 2), -u[1] + u[0]])
+
+    br = continue_equilibria(EquilibriumProblem(f, 2), EquilibriumSettings(ds=0.1, max_points=40, direction=-1,
+                                                                           lam_max=1.0), [1.0, 1.0], 1.0)
+    assert [s.type for s in br.special] == ["FOLD"] and br.special[0].located, br.special
+    assert abs(br.special[0].lam) <= max(br.special[0].lam_error, 1e-12)
+
+
+@pytest.mark.parametrize("s", [1.0, 1e-8, 1e-10])
+def test_a_hopf_point_in_slow_time_units_is_a_hopf_point(s):
+    """The Hopf normal form with a stable third mode, every rate times s (time measured in units far longer than
+    the system's own: a new user's audit found the class).  Its Hopf point at lam = 0 with omega = s: with s = 1e-8
+    the pair's imaginary part was compared with an absolute floor of 1e-7 and the crossing reported as two BPs."""
+    def f(u, lam, args):
+        x, y, z = u
+        r2 = x * x + y * y
+        return s * jnp.array([lam * x - y - x * r2, x + lam * y - y * r2, -z])
+
+    br = continue_equilibria(EquilibriumProblem(f, 3), EquilibriumSettings(ds=0.05, max_points=60, lam_max=0.5),
+                             [0.0, 0.0, 0.0], -0.5)
+    assert [sp.type for sp in br.special] == ["HOPF"], br.special
+    hopf = br.special[0]
+    assert hopf.located and abs(hopf.lam) < 1e-9
+    np.testing.assert_allclose(hopf.omega, s, rtol=1e-9)
+    np.testing.assert_allclose(hopf.period, 2 * np.pi / s, rtol=1e-9)
