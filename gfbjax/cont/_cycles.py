@@ -27,7 +27,7 @@ from ._events import (classify, crossed_multipliers, cycle_test_functions, detec
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, halved_mesh, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
-from ._newton import LinearSolveError
+from ._newton import LinearSolveError, with_finite_tangent
 from ._results import SpecialPoint
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
@@ -385,7 +385,9 @@ class CycleCurve(Curve):
 
     def correct(self, pred, con):
         # the last point's leading Floquet subspace (the block Krylov method's warm start) preconditions the solves
-        return self.solver.correct(pred, con, self.settings.newton, subspace=self.memo.get("krylov_start"))
+        sol, lin = self.solver.correct(pred, con, self.settings.newton, subspace=self.memo.get("krylov_start"))
+        sol = with_finite_tangent(sol)
+        return sol, (lin if sol.converged else None)
 
     def null_tangent(self, X):
         # At a fold of cycles the Jacobian at fixed lam is singular, but that of the collocation equations and

@@ -244,7 +244,9 @@ def continue_curve(curve: Curve, settings: Any, X0: Any, tau0: Any = None, *,
         outcome, message = _loop(run, X0, tau0, restored)
     except KeyboardInterrupt:
         outcome, message = Outcome.INTERRUPTED, "interrupted; the points computed so far are kept"
-    except LinearSolveError as exc:  # e.g. Arnoldi without convergence: a numerical failure, not a bug
+    # e.g. Arnoldi without convergence, or LAPACK's SVD or eigenvalue iteration failing on a matrix with NaN:
+    # numerical failures, not bugs
+    except (LinearSolveError, np.linalg.LinAlgError) as exc:
         outcome, message = Outcome.LINEAR_SOLVE_FAILED, f"{exc} (after {len(run.points)} points)"
     finally:
         if bar is not None:

@@ -39,7 +39,7 @@ from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
                       sign_changes, signed_min)
-from ._newton import NewtonSettings, solve as newton_solve
+from ._newton import NewtonSettings, solve as newton_solve, with_finite_tangent
 from ._problem import EquilibriumProblem
 from ._scalars import strong
 from ._settings import EquilibriumSettings
@@ -164,7 +164,7 @@ class EquilibriumCurve(Curve):
     def correct(self, pred, con):
         sol = _correct(self.problem.f, self.problem.args, jnp.asarray(pred, float), con, self.settings.newton)
         sol = type(sol)(np.asarray(sol.x), np.asarray(sol.aux), sol.code, sol.iterations, sol.residual, sol.step)
-        return sol, None
+        return with_finite_tangent(sol), None
 
     def null_tangent(self, y):
         J = np.asarray(_augmented_jacobian(self.problem.f, self.problem.args, jnp.asarray(y, float)))

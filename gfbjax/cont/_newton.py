@@ -39,7 +39,7 @@ import numpy as np
 from ._checks import check_flag, check_range, store
 from ._results import Outcome
 
-__all__ = ["NewtonSettings", "NewtonSolution", "LinearSolveError", "solve", "solve_host"]
+__all__ = ["NewtonSettings", "NewtonSolution", "LinearSolveError", "solve", "solve_host", "with_finite_tangent"]
 
 _RUNNING = Outcome.RUNNING.code
 
@@ -185,6 +185,20 @@ def solve(linearise: Callable[[Any], tuple[Any, Any, Any]], x0: Any, settings: N
 
     s, aux = jax.lax.while_loop(lambda c: c[0].code == _RUNNING, body, (_init(x0), aux0))
     return _solution(s, aux)
+
+
+def with_finite_tangent(sol: NewtonSolution) -> NewtonSolution:
+    """``sol``, or when it converged with a tangent (``aux``, any pytree of arrays) that is not finite, the same
+    ended NONFINITE.  A correction that lands exactly on a branch point converges (the residual vanishes) while
+    the bordered system that gives the tangent is singular; its NaN tangent made the next analysis fail
+    ("SVD did not converge") and lost the whole branch.  As NONFINITE the driver treats it as any failed
+    correction (a shorter step, or the next trial point of a localisation).  Host-side, on concrete arrays."""
+    if not bool(sol.converged):
+        return sol
+    if all(np.all(np.isfinite(np.asarray(a))) for a in jax.tree_util.tree_leaves(sol.aux)):
+        return sol
+    return NewtonSolution(x=sol.x, aux=sol.aux, code=Outcome.NONFINITE.code, iterations=sol.iterations,
+                          residual=sol.residual, step=sol.step)
 
 
 def solve_host(linearise: Callable[..., tuple[Any, Any, Any]], x0: Any, settings: NewtonSettings, *,

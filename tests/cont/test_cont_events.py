@@ -520,3 +520,21 @@ def test_a_hopf_point_in_slow_time_units_is_a_hopf_point(s):
     assert hopf.located and abs(hopf.lam) < 1e-9
     np.testing.assert_allclose(hopf.omega, s, rtol=1e-9)
     np.testing.assert_allclose(hopf.period, 2 * np.pi / s, rtol=1e-9)
+
+
+def test_a_correction_landing_on_a_branch_point_costs_no_branch():
+    """x' = lam - x^2, y' = -y + x, z' = (0.02 - x) z - z^3: a BP at lam = 0.02^2 = 4e-4 next to the fold at lam = 0
+    (a new user's audit).  A localisation correction converged exactly onto the BP, where the tangent's bordered
+    system is singular: its NaN tangent crashed the analysis ("SVD did not converge") and the whole branch was lost.
+    Such a correction now counts as failed; both points are located."""
+    def f(u, lam, args):
+        x, y, z = u
+        return jnp.array([lam - x * x, -y + x, (0.02 - x) * z - z ** 3])
+
+    br = continue_equilibria(EquilibriumProblem(f, 3), EquilibriumSettings(ds=0.1, ds_max=0.5, max_points=60,
+                             direction=-1, lam_max=1.0), [1.0, 1.0, 0.0], 1.0)
+    assert br.outcome is Outcome.REACHED_END, br.message
+    assert [s.type for s in br.special] == ["BP", "FOLD"], br.special
+    bp, fold = br.special
+    assert bp.located and abs(bp.lam - 4e-4) <= max(bp.lam_error, 1e-12)
+    assert fold.located and abs(fold.lam) <= max(fold.lam_error, 1e-12)
