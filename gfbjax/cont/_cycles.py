@@ -8,6 +8,7 @@ multiplier from +1.  Test functions of LPC, PD and NS: :mod:`._events`.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import partial
 from typing import Any, Callable, Optional
@@ -273,6 +274,17 @@ def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, wh
                          np.concatenate([mesh, inner, t_points]), mesh, float(orbit.lam), problem.args, what)
 
 
+#: a located fold of cycles whose amplitude is below this fraction of that at the step's ends is the family's end
+#: at a Hopf point (:meth:`CycleCurve.family_ends`)
+AMPLITUDE_END = 1e-3
+
+
+def _amplitude(orbit: col.Orbit) -> float:
+    """The largest peak-to-peak over the period among the components, at the mesh and interior nodes."""
+    nodes = np.concatenate([np.asarray(orbit.xm), np.asarray(orbit.xi).reshape(-1, orbit.n)])
+    return float(np.max(np.ptp(nodes, axis=0)))
+
+
 def _check_moves(orbit: col.Orbit, what: str) -> None:
     """ValueError when ``orbit``, a guess to correct, is constant: a constant orbit is an equilibrium with any
     period, and as its own phase reference it makes the phase condition (the integral of x . x_ref') vanish;
@@ -459,6 +471,15 @@ class CycleCurve(Curve):
 
     def from_state(self, state):
         return col.Orbit(*(jnp.asarray(state[k], float) for k in ("mesh", "xm", "xi", "T", "lam")))
+
+    def family_ends(self, X, left, right):
+        # amplitude (largest peak-to-peak over the components) at the fold against the step's ends: a family
+        # that shrinks to its Hopf point passes through zero amplitude, a true fold keeps its size
+        amp = [_amplitude(o) for o in (X, left, right)]
+        if not (max(amp[1:]) > 0.0 and amp[0] <= AMPLITUDE_END * max(amp[1:])):
+            return None
+        T = float(X.T)
+        return {"period": T, "omega": 2.0 * math.pi / T}
 
     def special(self, kind, X, an, located=True, ends=None):
         c = classify(kind, an["spectrum"], self.problem.n_trivial)

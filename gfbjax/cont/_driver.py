@@ -131,6 +131,12 @@ class Curve(abc.ABC):
         False: X is the first point past the event, not the event itself.  ``ends``: the test functions at the
         step's two ends, where known (what "small" means for a test value at X: relative to its values there)."""
 
+    def family_ends(self, X: Any, left: Any, right: Any) -> dict[str, Any] | None:
+        """Whether a fold located at X between the step's ends ``left`` and ``right`` is no fold but the end of
+        the family (cycles that shrink to an equilibrium: a Hopf point, where the family is born); then the
+        Hopf point's fields (``omega``, ``period``), else None (the default: a curve whose folds are folds)."""
+        return None
+
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
         when the curve does not provide it or the solve fails.  Used to place branch points across the gap where
@@ -379,6 +385,10 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                                             f"and {c.lam(Xn):.6g} (the {jump.kind} test function changes sign "
                                             f"across the gap): no step above ds_min = {s.ds_min:g} stays on "
                                             f"this branch")
+        ending = next(((f, d) for f in found if f.kind == "LPC" and f.located
+                       for d in [c.family_ends(f.point, X, Xn)] if d is not None), None)
+        if ending is not None:
+            return _end_at_hopf(run, *ending, found, X, ds, refined, ds_unrefined, ends)
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come
@@ -600,6 +610,28 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
             where = f"lam = {c.lam(f.point):.6g}"
     return Outcome.CONTACT, (f"{m.name} fell to its bound {m.minimum:g}{' ' + m.unit if m.unit else ''} at "
                              f"{where}: beyond it the solutions leave the model's validity (Monitor.stop)")
+
+
+def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any, ds: float, refined: int,
+                 ds_unrefined: float, ends: list[int]) -> tuple[Outcome, str]:
+    """End the branch at the Hopf point ``f`` where its cycles shrank to an equilibrium (a fold test changes sign
+    there only because the discrete family runs on through zero amplitude, back along itself): the events before
+    it in the step are inserted, the Hopf point is the last row (a located HOPF), and the rest is not recorded."""
+    c = run.curve
+    for g in sorted((g for g in found if g is not f and np.isfinite(g.s) and g.s < f.s), key=lambda g: g.s):
+        _insert(run, g)
+    rec = c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam)
+    run.special_states.append(c.state(f.point))
+    lam = float(c.lam(f.point))
+    run.special.append(SpecialPoint(type="HOPF", lam=lam, index=len(run.points),
+                                    spectrum=np.asarray(f.analysis["spectrum"]), located=True, residual=f.residual,
+                                    lam_error=f.lam_error, state=len(run.special_states) - 1, **data))
+    state = {"refined": refined, "ds_unrefined": ds_unrefined,
+             **{f"end{i}": float(row) for i, row in enumerate((ends + [len(run.points)])[-2:])}}
+    if not run.accept(rec, f.point, X, f.tangent, c.tests(f.analysis, f.tangent_lam), ds, state):
+        return Outcome.STOPPED, "stopped by the callback"
+    return Outcome.ENDED_AT_HOPF, (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where "
+                                   "the family ends (its equilibria continue there)")
 
 
 def _own_member(run: _Run, f: Found) -> None:

@@ -263,3 +263,29 @@ def test_start_without_a_solution_nearby_fails_instead_of_moving(ds, ds_max, dla
     br = continue_cycles(prob, st, start)
     assert br.outcome is Outcome.START_FAILED and len(br) == 0, br.message
     assert "farther than" in br.message or "did not converge" in br.message
+
+
+def test_a_family_followed_down_to_its_hopf_point_ends_there(tmp_path):
+    """Supercritical Stuart-Landau from lam = 0.5 towards smaller lam: the cycles (radius sqrt(lam)) shrink to the
+    equilibrium at the Hopf point lam = 0, where the family ends.  A new user's audit: the discrete family ran on
+    through zero amplitude and back along itself, and the turn was reported as a located LPC at lam = 1e-15 (there
+    is no fold of cycles).  Now the branch ends there with a located HOPF as its last row, also when resumed."""
+    from gfbjax.cont import start_from_function
+
+    prob = CycleProblem(stuart_landau, 2, jnp.asarray(W))
+    for ds_max in (0.3, 0.1):
+        st = CycleSettings(m=4, N=10, ds=0.05, ds_max=ds_max, max_points=30, lam_min=-0.5, lam_max=0.6, direction=-1)
+        r0 = np.sqrt(0.5)
+        start = start_from_function(lambda t: r0 * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                    2 * np.pi / W, 0.5, st)
+        br = continue_cycles(prob, st, start, checkpoint=tmp_path / str(ds_max))
+        assert br.outcome is Outcome.ENDED_AT_HOPF, br.message
+        assert [s.type for s in br.special] == ["HOPF"], br.special
+        hopf = br.special[0]
+        assert hopf.located and abs(hopf.lam) < 1e-9 and hopf.index == len(br) - 1
+        np.testing.assert_allclose(hopf.omega, W, rtol=1e-6)
+        np.testing.assert_allclose(br.l2[:-1] ** 2, 0.0 + br.lam[:-1], rtol=1e-6, atol=1e-9)  # |x|^2 = lam
+        assert np.all(np.diff(br.lam) < 0)  # never back up along the family
+        again = continue_cycles(prob, st, start, checkpoint=tmp_path / str(ds_max))
+        assert again.outcome is Outcome.ENDED_AT_HOPF and len(again) == len(br)
+        assert [(s.type, s.index) for s in again.special] == [(s.type, s.index) for s in br.special]
