@@ -446,11 +446,30 @@ def _unexplained(c: Curve, tests: dict | None, tests_n: dict, detect: tuple = ()
     if tests is None or "UNSTABLE" not in tests or "UNSTABLE" not in tests_n or not c.event_weights:
         return 0
     kept = {f.kind for f in found}
-    explained = sum(c.event_weights[k] for k in c.events(tests, tests_n, tuple(c.event_weights))
-                    if k not in detect or k in kept)
+    kinds = [k for k in c.events(tests, tests_n, tuple(c.event_weights)) if k not in detect or k in kept]
+    explained = sum(c.event_weights[k] for k in kinds)
     matched = (c.crossings(tests["CRITICAL"], tests_n["CRITICAL"])
                if "CRITICAL" in tests and "CRITICAL" in tests_n else 0)
-    return max(0, max(_crossings(tests, tests_n, start_reported), matched) - explained)
+    return max(0, max(_crossings(tests, tests_n, start_reported), matched) - explained,
+               _odd_one_out(tests, tests_n, kinds, explained))
+
+
+#: events whose member need not cross the boundary: along a side branch that turns at a branch point the critical
+#: eigenvalue (multiplier) touches it and goes back
+_TOUCHING = frozenset({"BP", "BPC"})
+
+
+def _odd_one_out(tests: dict, tests_n: dict, kinds: list[str], explained: int) -> int:
+    """1 when the events found cannot be all that crossed, by parity: each real member through the boundary
+    changes the unstable count by one and each complex pair by two, so the count's change and the crossings of
+    the events found (their weights) have the same parity.  A fold with the unstable count unchanged hides a second
+    real crossing the other way (a branch point of cycles one step from a fold, whose multiplier through +1
+    cancels the fold's in the BPC test, while nearest-neighbour matching pairs the two multipliers wrongly: a new
+    user's audit).  Not decided where a member lies on the boundary at either end (its side is arbitrary), nor
+    when a branch point is among the events (its member may only touch the boundary)."""
+    if tests.get("BOUNDARY", 0.0) or tests_n.get("BOUNDARY", 0.0) or _TOUCHING.intersection(kinds):
+        return 0
+    return int((int(tests_n["UNSTABLE"] - tests["UNSTABLE"]) - explained) % 2)
 
 
 def _crossings(tests: dict, tests_n: dict, start_reported: bool = True) -> int:

@@ -538,3 +538,33 @@ def test_a_correction_landing_on_a_branch_point_costs_no_branch():
     bp, fold = br.special
     assert bp.located and abs(bp.lam - 4e-4) <= max(bp.lam_error, 1e-12)
     assert fold.located and abs(fold.lam) <= max(fold.lam_error, 1e-12)
+
+
+def _bautin_with_a_symmetric_mode(U, lam, sb):
+    """A warped Bautin normal form r' = r (lam + 2 s - s^2), s = r^2 (fold of cycles at lam = -1, s = 1) with a
+    symmetric mode y' = (s - sb) y - y^3: a pitchfork of cycles (BPC) where s = sb, lam = sb^2 - 2 sb."""
+    a = 0.3
+    x1, x2, y = U[0], U[1] - a * U[0] ** 2, U[2]
+    s = x1 * x1 + x2 * x2
+    g, om = lam + 2 * s - s * s, 1 + 0.3 * s
+    F0, F1 = g * x1 - om * x2, om * x1 + g * x2
+    return jnp.array([F0, F1 + 2 * a * x1 * F0, (s - sb) * y - y ** 3])
+
+
+@pytest.mark.parametrize("sb", [0.9, 1.07])
+def test_a_branch_point_of_cycles_one_step_from_a_fold_is_found(sb):
+    """A new user's audit: with the BPC within one step of the fold (ds_max = 0.3), the fold's multiplier and the
+    BPC's crossed +1 in opposite directions, cancelling in the BPC test and in the unstable count, and matching
+    paired them wrongly: only the LPC was reported.  The parity of the unstable count's change against the events
+    found now shows the hidden crossing; the step is refined and both are located."""
+    s0 = 0.6
+    r0 = np.sqrt(s0)
+    st = CycleSettings(m=4, N=12, ds=0.05, ds_max=0.3, max_points=40, lam_min=-1.5, lam_max=-0.5, direction=-1)
+    orbit = lambda t: np.stack([r0 * np.cos(2 * np.pi * t), r0 * np.sin(2 * np.pi * t)
+                                + 0.3 * (r0 * np.cos(2 * np.pi * t)) ** 2, 0 * t], 1)
+    br = continue_cycles(CycleProblem(_bautin_with_a_symmetric_mode, 3, sb), st,
+                         start_from_function(orbit, 2 * np.pi / (1 + 0.3 * s0), s0 * s0 - 2 * s0, st))
+    got = {s.type: s for s in br.special}
+    assert sorted(got) == ["BPC", "LPC"], br.special
+    assert abs(got["LPC"].lam + 1.0) <= max(got["LPC"].lam_error, 1e-9)
+    assert abs(got["BPC"].lam - (sb * sb - 2 * sb)) <= max(got["BPC"].lam_error, 1e-9), got["BPC"]
