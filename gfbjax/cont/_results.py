@@ -107,7 +107,8 @@ class SpecialPoint:
     type within each other's error bars may be one crossing seen several times: a discrete branch that zig-zags
     within its own error (at a fold where mesh nodes cross a kink of f).  They are all reported, each with an error
     bar that covers the exact crossing; telling one event from several is left to a finer mesh.
-    lam_error: an estimate of the error of ``lam``, in its units (NaN: none).  The test function vanishes to
+    lam_error: an estimate of the error of ``lam``, in its units (NaN: none; also where the point was located or
+    bracketed but every relocation on the other meshes failed, so that the discretisation's share is unknown).  The test function vanishes to
     ``locate_tol`` on *this* discretisation; the zero of the exact problem lies about ``lam_error`` away.  For a
     located cycle point: how far the zero moves when it is located again on the mesh with every interval halved
     or on the mesh staggered by half an interval (the larger move), plus the residual's share; for a located equilibrium only the residual's share (there is no discretisation).
