@@ -19,7 +19,9 @@ A step file holds ``rows`` (JSON: the scalar fields of each new :class:`~._branc
 ``row<i>_<field>`` and ``row<i>_state_<key>``, ``special`` (JSON: the new :class:`~._results.SpecialPoint` records)
 with their states ``special<i>_<key>``, and the driver state: ``X_<key>``, ``Xprev_<key>`` (absent on the first
 step), ``tau_<key>``, ``tests`` (JSON), ``ds`` and ``driver`` (JSON: the event-refinement counters, so that a
-resumed branch refines exactly as an uninterrupted one).
+resumed branch refines exactly as an uninterrupted one; or ``ended`` and ``message`` when that step ended the
+branch, e.g. at a Hopf point where a family of cycles ends, so that a run interrupted before ``end.json`` was
+written resumes to that end).
 
 Resuming: opening a folder that holds steps with the same identity continues after the last step; one that
 ended (``end.json``, any outcome but ``interrupted`` or ``stopped``) returns the stored branch without computing.
@@ -67,7 +69,7 @@ class Restored:
     ds: float
     outcome: Outcome | None = None  # set when the branch had ended (end.json)
     message: str = ""
-    driver: dict[str, float] = field(default_factory=dict)  # the driver's counters (event refinement)
+    driver: dict[str, float | str] = field(default_factory=dict)  # the driver's counters, or the end it recorded
 
 
 def _plain(value: Any) -> Any:
@@ -189,7 +191,7 @@ class Checkpoint:
     def append(self, points: list[PointRecord], special: list[SpecialPoint],
                special_states: list[dict[str, np.ndarray]], X: dict[str, np.ndarray],
                X_prev: dict[str, np.ndarray] | None, tau: dict[str, np.ndarray], tests: dict[str, float] | None,
-               ds: float, driver: dict[str, float] | None = None) -> None:
+               ds: float, driver: dict[str, float | str] | None = None) -> None:
         """Write one step: the rows and special points added since the last call, and the driver state."""
         arrays: dict[str, np.ndarray] = {}
         rows = []
@@ -209,7 +211,8 @@ class Checkpoint:
         arrays["special"] = np.array(json.dumps(sps))
         arrays["tests"] = np.array(json.dumps(_encode_tests(tests)))
         arrays["ds"] = np.array(float(ds))
-        arrays["driver"] = np.array(json.dumps({k: float(v) for k, v in (driver or {}).items()}))
+        arrays["driver"] = np.array(json.dumps({k: v if isinstance(v, str) else float(v)
+                                                for k, v in (driver or {}).items()}))
         path = self.folder / f"step_{self._next:05d}.npz"
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as fh:

@@ -321,6 +321,10 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
     dlam_start = min(s.dlam_max, _chord_dlam(s))
     # rows of the last two steps' end points (the start counts when it was recorded), for chord_tol
     ends = [len(run.points) - 1] if run.points else []
+    if restored is not None and restored.driver.get("ended"):
+        # the last step written ended the branch (its end row, e.g. a Hopf point where the family ends), but the
+        # run was interrupted before it recorded the end: nothing follows that row
+        return Outcome(restored.driver["ended"]), str(restored.driver.get("message", ""))
     if restored is not None and restored.driver:
         refined, ds_unrefined = int(restored.driver["refined"]), float(restored.driver["ds_unrefined"])
         ends = [int(restored.driver[k]) for k in ("end0", "end1") if restored.driver.get(k, -1) >= 0]
@@ -385,10 +389,11 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                                             f"and {c.lam(Xn):.6g} (the {jump.kind} test function changes sign "
                                             f"across the gap): no step above ds_min = {s.ds_min:g} stays on "
                                             f"this branch")
-        ending = next(((f, d) for f in found if f.kind == "LPC" and f.located
+        # located, or bracketed (a subcritical family's fold test can jump there): a point at zero amplitude
+        ending = next(((f, d) for f in found if f.kind == "LPC" and (f.located or np.isfinite(f.residual))
                        for d in [c.family_ends(f.point, X, Xn)] if d is not None), None)
         if ending is not None:
-            return _end_at_hopf(run, *ending, found, X, ds, refined, ds_unrefined, ends)
+            return _end_at_hopf(run, *ending, found, X, ds)
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come
@@ -621,21 +626,32 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
                  an_n: dict) -> tuple[Outcome, str]:
     """The branch crossed its monitor's bound: record the located crossing as its last point and end."""
     c, m = run.curve, run.curve.monitor
-    where = f"lam = {c.lam(X):.6g}" if tests is not None else "the start"
+
+    def message(where: str) -> str:
+        return (f"{m.name} fell to its bound {m.minimum:g}{' ' + m.unit if m.unit else ''} at {where}: beyond it "
+                "the solutions leave the model's validity (Monitor.stop)")
+
     if tests is not None and tau is not None and run.s.locate:
         f = bracket(run, "MONITOR", X, tau, ds, tests, tests_n, Xn, an_n)
         if np.isfinite(f.residual):
-            run.points.append(c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam))
-            where = f"lam = {c.lam(f.point):.6g}"
-    return Outcome.CONTACT, (f"{m.name} fell to its bound {m.minimum:g}{' ' + m.unit if m.unit else ''} at "
-                             f"{where}: beyond it the solutions leave the model's validity (Monitor.stop)")
+            # the crossing is the last row: through accept, so that the callback sees it and the checkpoint holds
+            # it with the end (a run interrupted before end.json is written resumes to this end)
+            text = message(f"lam = {c.lam(f.point):.6g}")
+            rec = c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam)
+            t = f.tangent if f.tangent is not None else tau
+            if not run.accept(rec, f.point, X, t, c.tests(f.analysis, run.tangent_lam(t)), ds,
+                              {"ended": str(Outcome.CONTACT), "message": text}):
+                return Outcome.STOPPED, "stopped by the callback"
+            return Outcome.CONTACT, text
+    return Outcome.CONTACT, message(f"lam = {c.lam(X):.6g}" if tests is not None else "the start")
 
 
-def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any, ds: float, refined: int,
-                 ds_unrefined: float, ends: list[int]) -> tuple[Outcome, str]:
+def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any,
+                 ds: float) -> tuple[Outcome, str]:
     """End the branch at the Hopf point ``f`` where its cycles shrank to an equilibrium (a fold test changes sign
     there only because the discrete family runs on through zero amplitude, back along itself): the events before
-    it in the step are inserted, the Hopf point is the last row (a located HOPF), and the rest is not recorded."""
+    it in the step are inserted, the Hopf point is the last row (a HOPF, located or bracketed as the fold was), and
+    the rest is not recorded."""
     c = run.curve
     for g in sorted((g for g in found if g is not f and np.isfinite(g.s) and g.s < f.s), key=lambda g: g.s):
         _insert(run, g)
@@ -643,14 +659,15 @@ def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], 
     run.special_states.append(c.state(f.point))
     lam = float(c.lam(f.point))
     run.special.append(SpecialPoint(type="HOPF", lam=lam, index=len(run.points),
-                                    spectrum=np.asarray(f.analysis["spectrum"]), located=True, residual=f.residual,
+                                    spectrum=np.asarray(f.analysis["spectrum"]), located=f.located, residual=f.residual,
                                     lam_error=f.lam_error, state=len(run.special_states) - 1, **data))
-    state = {"refined": refined, "ds_unrefined": ds_unrefined,
-             **{f"end{i}": float(row) for i, row in enumerate((ends + [len(run.points)])[-2:])}}
+    message = (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where the family ends (its "
+               "equilibria continue there)")
+    # the end goes into the step itself: a run interrupted after writing it resumes to this end, not past it
+    state = {"ended": str(Outcome.ENDED_AT_HOPF), "message": message}
     if not run.accept(rec, f.point, X, f.tangent, c.tests(f.analysis, f.tangent_lam), ds, state):
         return Outcome.STOPPED, "stopped by the callback"
-    return Outcome.ENDED_AT_HOPF, (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where "
-                                   "the family ends (its equilibria continue there)")
+    return Outcome.ENDED_AT_HOPF, message
 
 
 def _own_member(run: _Run, f: Found) -> None:

@@ -38,7 +38,7 @@ from ._checks import check_field_at, check_finite, check_index, check_located_st
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
-                      sign_changes, signed_min)
+                      side, sign_changes, signed_min)
 from ._newton import NewtonSettings, solve as newton_solve, with_finite_tangent
 from ._problem import EquilibriumProblem
 from ._scalars import strong
@@ -190,27 +190,28 @@ class EquilibriumCurve(Curve):
         out = {"FOLD": float(tangent_lam), "HOPF": signed_min(_hopf_factors(an["spectrum"])[0]), "BP": an["bp"],
                "UNSTABLE": float(np.sum(np.real(an["spectrum"]) > 0.0)),
                "BOUNDARY": float(np.sum(_from_axis(*_in_units(an["spectrum"])) <= ON_BOUNDARY)),
-               "CRITICAL": critical(an["spectrum"], lambda z: np.abs(z.real))}
+               # in the units of _in_units (this point's whole spectrum), as crossings and crossing_kinds compare
+               "CRITICAL": critical(_in_units(an["spectrum"])[0], lambda z: np.abs(z.real))}
         if self.monitor is not None:
             out["MONITOR"] = an["monitor"] - float(self.monitor.minimum)
         return out
 
     def crossing_kinds(self, an, count, before=None):
-        """``count`` crossings named from the eigenvalues that crossed the imaginary axis since ``before``
-        (matched), then those nearest it: a complex pair a HOPF (two crossings, with its own omega), a real one a
-        BP."""
+        """``count`` crossings named from the eigenvalues that crossed the imaginary axis since ``before`` (the
+        earlier point's ``CRITICAL``; matched), then those nearest it: a complex pair a HOPF (two crossings, with
+        its own omega), a real one a BP."""
         ev = np.asarray(an["spectrum"], complex)
         unit = _in_units(ev)[0]
-        crossed = [] if before is None else crossed_members(*_in_units(ev, before)[::-1], _unstable, _from_axis)
+        crossed = [] if before is None else crossed_members(before, unit, _unstable, _from_axis)
         # omega in the problem's time: the named member's index in the spectrum, not its value in other units
         names = _name_crossings(unit, count, lambda z: abs(z.real), "HOPF", lambda z: "BP", crossed)
         return [(k, {"omega": abs(ev[int(np.argmin(np.abs(unit - z)))].imag)} if k == "HOPF" else {})
                 for k, z in names]
 
     def crossings(self, before, after):
-        """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`)."""
-        a, b = _in_units(after, before)
-        return matched_crossings(b, a, _unstable, _from_axis)
+        """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`);
+        ``before``, ``after``: the points' ``CRITICAL`` members, each in the units of its whole spectrum."""
+        return matched_crossings(before, after, _unstable, _from_axis)
 
     def events(self, prev, cur, kinds):
         found = sign_changes(prev, cur, kinds)
@@ -236,7 +237,7 @@ class EquilibriumCurve(Curve):
         return np.append(np.asarray(state["x"], float), float(state["lam"]))
 
     def special(self, kind, y, an, located=True, ends=None):
-        if kind == "FOLD" and ends is not None and _at_branch_point(an["bp"], ends):
+        if kind == "FOLD" and ends is not None and _at_branch_point(ends):
             return None  # the lam-component of the tangent also vanishes at a branch point: reported as BP
         if kind != "HOPF":
             return {}
@@ -254,18 +255,14 @@ class EquilibriumCurve(Curve):
         return {"omega": omega, "period": 2 * np.pi / omega}
 
 
-#: a fold located where the branch-point test is below this fraction of its larger value at the step's ends lies
-#: at a branch point (the curve turning there is the side branch leaving it)
-BP_DIP = 1e-3
-
-
-def _at_branch_point(bp: float, ends: tuple[dict, dict]) -> bool:
-    """Whether the branch-point test ``bp`` at a located fold dips to zero against its values at the step's ends.
-    Relative, not absolute: the test is the smallest singular value of the augmented Jacobian (signed), which a
-    slow mode keeps small all along a branch (z' = -1e-7 z beside a fold made every fold a "BP" with an absolute
-    threshold of 1e-6), while at a branch point it vanishes between ends where it does not."""
-    scale = max(abs(float(e.get("BP", math.nan))) for e in ends)
-    return bool(np.isfinite(scale) and abs(bp) <= BP_DIP * scale)
+def _at_branch_point(ends: tuple[dict, dict]) -> bool:
+    """Whether a fold located inside a step lies at a branch point: the branch-point test changes sign over the
+    step.  Not how small the test is at the fold: it is the smallest singular value of the augmented Jacobian
+    (signed), which a slow mode keeps small all along a branch (z' = -1e-7 z beside a fold made every fold a "BP"
+    with an absolute threshold of 1e-6), or makes small at the fold alone (z' = -(1e-9 + lam) z, whose rate
+    passes 1e-9 there: a threshold relative to the step's ends failed on it)."""
+    a, b = (float(e.get("BP", math.nan)) for e in ends)
+    return bool(np.isfinite(a) and np.isfinite(b) and side(a) != side(b))
 
 
 def continue_equilibria(problem: EquilibriumProblem, settings: EquilibriumSettings, x0: Any, lam0: float,

@@ -138,6 +138,8 @@ EXPLICIT_N = 64
 DECIDING = 0.9
 #: the largest state dimension for which the dense eigenvalue problems are solved
 MAX_DENSE = 1500
+#: the most stability-function systems (intervals x modes x frozen nodes) :func:`resolution` solves in one batch
+STABILITY_BATCH = 100_000
 
 
 @partial(jax.jit, static_argnums=(0,))
@@ -158,16 +160,21 @@ def resolution(f: Callable, orbit: col.Orbit, args: Any, scheme: col.Scheme,
     J = np.asarray(_jacobians(f, jnp.asarray(np.asarray(orbit.xm)[at]), orbit.lam, args))
     h = float(orbit.T) * np.diff(np.asarray(orbit.mesh, float))
     T = float(np.sum(h))
-    # all frozen nodes at once (k, n): one batched eigenvalue call and one for the stability function, not a
-    # Python loop over the nodes (at small n the loop was most of the estimate's time)
-    lam = np.linalg.eigvals(J)
-    exact = np.exp(np.clip(lam.real * T, -700.0, 700.0) + 1j * lam.imag * T)
-    discrete = np.prod(scheme.stability(h[:, None, None] * lam[None]), axis=0)
-    fast = np.abs(exact) < FAST
-    stiff = float(np.max(np.abs(discrete[fast]), initial=0.0))
-    deciding = np.maximum(np.abs(exact), np.abs(discrete)) >= DECIDING * min(1.0, leading)
-    err = np.abs(discrete - exact) / np.maximum(1.0, np.abs(exact))
-    return stiff, float(np.max(err[deciding | ~fast], initial=0.0))
+    # the frozen nodes in batches (one eigenvalue call and one stability call per batch), not one at a time: at
+    # small n the Python loop over the nodes was most of the estimate's time; batches of at most STABILITY_BATCH
+    # stability systems (m x m each) bound the memory (all nodes at once took 2 GB at n = 30, N = 300, m = 5)
+    stiff, error = 0.0, 0.0
+    per = max(1, STABILITY_BATCH // (len(h) * orbit.n))
+    for first in range(0, len(J), per):
+        lam = np.linalg.eigvals(J[first:first + per])
+        exact = np.exp(np.clip(lam.real * T, -700.0, 700.0) + 1j * lam.imag * T)
+        discrete = np.prod(scheme.stability(h[:, None, None] * lam[None]), axis=0)
+        fast = np.abs(exact) < FAST
+        stiff = max(stiff, float(np.max(np.abs(discrete[fast]), initial=0.0)))
+        deciding = np.maximum(np.abs(exact), np.abs(discrete)) >= DECIDING * min(1.0, leading)
+        err = np.abs(discrete - exact) / np.maximum(1.0, np.abs(exact))
+        error = max(error, float(np.max(err[deciding | ~fast], initial=0.0)))
+    return stiff, error
 
 
 def _deciding_modes(orbit: col.Orbit, lin: Any, spectrum: np.ndarray, modes: tuple[np.ndarray, np.ndarray] | None,

@@ -48,15 +48,16 @@ class DenseLU:
         self._lu, self._piv = sla.lu_factor(K, check_finite=False)
 
     def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
-        getrs = _GETRS.get(b.dtype.char) or sla.get_lapack_funcs("getrs", (self._lu, b))
+        getrs = _GETRS if self._lu.dtype.char == b.dtype.char == "d" else sla.get_lapack_funcs("getrs", (self._lu, b))
         x, info = getrs(self._lu, self._piv, b, trans=1 if trans == "T" else 0)
         if info:  # only for bad arguments (getrs does not test for singularity), as in lu_solve
             raise ValueError(f"illegal value in argument {-info} of getrs")
         return x
 
 
-# getrs for float64 right-hand sides against the float64 factors (other dtypes go through get_lapack_funcs)
-_GETRS = {"d": sla.get_lapack_funcs("getrs", (np.zeros((1, 1)),))}
+# getrs for float64 factors and right-hand sides; any other pair goes through get_lapack_funcs, which picks the
+# routine for both dtypes (a real one would drop a complex factor's imaginary part)
+_GETRS = sla.get_lapack_funcs("getrs", (np.zeros((1, 1)),))
 
 
 class IntervalSweeps(Linearisation):

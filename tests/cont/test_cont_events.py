@@ -492,6 +492,20 @@ def test_a_fold_beside_a_slow_mode_is_a_fold(k):
     assert fold.located and abs(fold.lam) <= max(fold.lam_error, 1e-12)
 
 
+@pytest.mark.parametrize("a", [1e-7, 1e-9])
+def test_a_fold_where_a_mode_slows_down_is_a_fold(a):
+    """x' = lam - x^2 beside z' = -(a + lam) z, whose rate falls to a at the fold (a reviewer's case): the branch-point
+    test is about a there and ~1e-2 at the step's ends, which a threshold relative to the ends read as a branch
+    point.  No branch point lies on the branch (the z rate stays positive); the fold is located."""
+    def f(u, lam, args):
+        return jnp.array([lam - u[0] ** 2, -u[1] + u[0], -(a + lam) * u[2]])
+
+    br = continue_equilibria(EquilibriumProblem(f, 3), EquilibriumSettings(ds=0.1, max_points=40, direction=-1,
+                                                                           lam_max=1.0), [1.0, 1.0, 0.0], 1.0)
+    assert [s.type for s in br.special] == ["FOLD"], br.special
+    assert br.special[0].located and abs(br.special[0].lam) <= max(br.special[0].lam_error, 1e-12)
+
+
 def test_a_fold_on_a_slow_time_scale_is_a_fold():
     """x' = s (lam - x^2) with s = 3e-7 (every rate small): the fold at lam = 0, located."""
     def f(u, lam, args):

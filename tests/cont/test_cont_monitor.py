@@ -59,3 +59,19 @@ def test_bad_monitor_is_refused():
         Monitor("gap", lambda x, p, a: x[0], float("nan"))
     with pytest.raises(ValueError, match="monitor"):
         EquilibriumProblem(linear, 1, monitor=lambda x, p, a: x[0])
+
+
+def test_the_row_at_a_stopping_bound_is_reported_and_kept(tmp_path):
+    """x' = p - x with the monitor 1 - x >= 0: the branch ends at x = 1 with the located crossing as its last row.
+    That row reached neither the callback nor the checkpoint (a reviewer's case): a finished branch read back from
+    its folder was one row short."""
+    mon = Monitor("gap", lambda x, p, a: 1.0 - x[0], 0.0)
+    prob, st = EquilibriumProblem(lambda x, p, a: jnp.array([p - x[0]]), 1, monitor=mon), \
+        EquilibriumSettings(ds=0.3, lam_max=3.0)
+    seen = []
+    br = continue_equilibria(prob, st, np.array([0.0]), 0.0, callback=lambda i, r: seen.append(i),
+                             checkpoint=tmp_path)
+    assert br.outcome is Outcome.CONTACT and abs(br.lam[-1] - 1.0) < 1e-9
+    assert seen == list(range(len(br)))
+    back = continue_equilibria(prob, st, np.array([0.0]), 0.0, checkpoint=tmp_path)
+    assert back.outcome is Outcome.CONTACT and len(back) == len(br) and back.lam[-1] == br.lam[-1]
