@@ -304,6 +304,33 @@ def evaluate(orbit: Orbit, scheme: Scheme, per_interval: int = 8) -> tuple[np.nd
     return np.append(t, 1.0), np.vstack([X, np.asarray(orbit.xm[-1])[None]])
 
 
+#: An orbit whose amplitude (:func:`amplitude`) is at most this fraction of a reference orbit's has shrunk to an
+#: equilibrium against it: a fold of cycles located at such a point is the family's end at a Hopf point
+#: (:meth:`~._cycles.CycleCurve.family_ends`), and a correction that converges to such an orbit has collapsed
+#: (:func:`collapsed`).  On a family born at a Hopf point the amplitude grows like sqrt|lam - lam_H|, so 1e-3 of
+#: the reference's amplitude is within ~1e-6 of the reference's distance to the Hopf point.
+AMPLITUDE_END = 1e-3
+
+
+def amplitude(orbit: Orbit) -> np.ndarray:
+    """The largest peak-to-peak value over the period among the components, at the mesh and interior nodes, in
+    the states' units; a float for one orbit, shape (k,) for k orbits stacked on a leading axis (a vmapped
+    correction's result)."""
+    xm, xi = np.asarray(orbit.xm), np.asarray(orbit.xi)
+    nodes = np.concatenate([xm, xi.reshape(*xi.shape[:-3], -1, xi.shape[-1])], axis=-2)
+    return np.max(np.ptp(nodes, axis=-2), axis=-1)
+
+
+def collapsed(orbit: Orbit, guess: Orbit) -> np.ndarray:
+    """Whether ``orbit``, a converged correction of ``guess``, is an equilibrium rather than a cycle: its
+    amplitude is at most :data:`AMPLITUDE_END` of the guess's, which moves.  A constant orbit solves the
+    collocation equations (27)-(28) with any period, and the phase condition (29) vanishes on it, so Newton can
+    converge there from a guess near (or past) a Hopf point, where a family of cycles shrinks to zero amplitude;
+    the result is no cycle.  Elementwise for stacked orbits, as :func:`amplitude`."""
+    a0 = amplitude(guess)
+    return (a0 > 0.0) & (amplitude(orbit) <= AMPLITUDE_END * a0)
+
+
 # --------------------------------------------------------------------------
 # Functionals:  integral inner products  int_0^1 <a(t), b(t)> dt
 # --------------------------------------------------------------------------

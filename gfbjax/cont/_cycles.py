@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any, Callable, Optional
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -29,7 +30,7 @@ from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, halved_mesh, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
 from ._newton import LinearSolveError, with_finite_tangent
-from ._results import SpecialPoint
+from ._results import Outcome, SpecialPoint
 from ._problem import CycleProblem
 from ._settings import CycleSettings, Natural
 from ._resolution import multiplier_estimates
@@ -274,23 +275,11 @@ def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, wh
                          np.concatenate([mesh, inner, t_points]), mesh, float(orbit.lam), problem.args, what)
 
 
-#: a located fold of cycles whose amplitude is below this fraction of that at the step's ends is the family's end
-#: at a Hopf point (:meth:`CycleCurve.family_ends`)
-AMPLITUDE_END = 1e-3
-
-
-def _amplitude(orbit: col.Orbit) -> float:
-    """The largest peak-to-peak over the period among the components, at the mesh and interior nodes."""
-    nodes = np.concatenate([np.asarray(orbit.xm), np.asarray(orbit.xi).reshape(-1, orbit.n)])
-    return float(np.max(np.ptp(nodes, axis=0)))
-
-
 def _check_moves(orbit: col.Orbit, what: str) -> None:
     """ValueError when ``orbit``, a guess to correct, is constant: a constant orbit is an equilibrium with any
     period, and as its own phase reference it makes the phase condition (the integral of x . x_ref') vanish;
     Newton's matrix is singular and the correction would end "nonfinite" or "diverged" without saying why."""
-    nodes = np.concatenate([np.asarray(orbit.xm), np.asarray(orbit.xi).reshape(-1, orbit.n)])
-    if np.max(np.ptp(nodes, axis=0)) <= 1e-14 * (1.0 + np.max(np.abs(nodes))):
+    if col.amplitude(orbit) <= 1e-14 * (1.0 + max(float(np.max(np.abs(orbit.xm))), float(np.max(np.abs(orbit.xi))))):
         raise ValueError(f"{what} is constant (every node equals xm[0]): a cycle needs a guess that moves; start "
                          "from a Hopf point (start_from_hopf), a period-doubling point (start_from_pd), a branch "
                          "(start_from_branch) or samples of a time integration (start_from_samples)")
@@ -301,7 +290,9 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     """Correct one orbit with the linear solver and Newton tolerances of ``settings`` (default
     ``CycleSettings()``): at fixed lam = ``orbit.lam`` with phase reference ``orbit`` unless ``con`` is given.
     Returns the :class:`NewtonSolution` (``x`` the orbit, ``aux`` the unit tangent) and the linearisation at
-    the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives.
+    the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives.  A
+    correction that converged to an equilibrium (the constant orbit, :func:`._collocation.collapsed`) found no
+    cycle: its outcome is ``NO_SOLUTION``.
     Raises ``ValueError`` before any work when the inputs do not fit together (:func:`check_cycle_inputs`) or the
     orbit is not finite (mesh, T, lam, states) or f is NaN or inf at any of its nodes (the message names the
     node's scaled time and components)."""
@@ -323,7 +314,11 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     _check_orbit(problem, orbit, scheme, "the orbit")
     _check_moves(orbit, "the orbit")
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
-    return bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
+    sol, lin = bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
+    if bool(sol.converged) and col.collapsed(sol.x, orbit):
+        code = jnp.asarray(Outcome.NO_SOLUTION.code, jnp.asarray(sol.code).dtype)
+        return eqx.tree_at(lambda r: r.code, sol, code), None
+    return sol, lin
 
 
 def analyse(problem: CycleProblem, lin: Linearisation, floquet: FloquetMethod | None = None,
@@ -475,11 +470,13 @@ class CycleCurve(Curve):
     def family_ends(self, X, left, right):
         # amplitude (largest peak-to-peak over the components) at the fold against the step's ends: a family
         # that shrinks to its Hopf point passes through zero amplitude, a true fold keeps its size
-        amp = [_amplitude(o) for o in (X, left, right)]
-        if not (max(amp[1:]) > 0.0 and amp[0] <= AMPLITUDE_END * max(amp[1:])):
+        if not any(col.collapsed(X, end) for end in (left, right)):
             return None
         T = float(X.T)
         return {"period": T, "omega": 2.0 * math.pi / T}
+
+    def collapsed(self, X, guess):
+        return bool(col.collapsed(X, guess))
 
     def special(self, kind, X, an, located=True, ends=None):
         c = classify(kind, an["spectrum"], self.problem.n_trivial)

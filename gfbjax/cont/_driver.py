@@ -137,6 +137,12 @@ class Curve(abc.ABC):
         Hopf point's fields (``omega``, ``period``), else None (the default: a curve whose folds are folds)."""
         return None
 
+    def collapsed(self, X: Any, guess: Any) -> bool:
+        """Whether X, a converged correction of ``guess``, is no member of the curve but a degenerate solution of
+        its equations (cycles: an equilibrium, the constant orbit, which solves them with any period); False by
+        default."""
+        return False
+
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
         when the curve does not provide it or the solve fails.  Used to place branch points across the gap where
@@ -343,6 +349,16 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         Xn, tau_n = sol.x, sol.aux
         if direction is None:  # natural parameter: orient the corrector's tangent by the stepping direction
             tau_n = c.scale(tau_n, float(s.direction))
+        if c.collapsed(Xn, X):
+            # the step passed the Hopf point where the family shrinks to zero amplitude and the correction landed
+            # on the equilibrium (which solves the cycles' equations with any period, and has no fold to signal
+            # it): shorter steps approach the end until the halvings are spent, then the branch ends there
+            if refined < s.event_refine and 0.5 * ds >= s.ds_min:
+                if refined == 0:
+                    ds_unrefined = ds
+                ds, refined = 0.5 * ds, refined + 1
+                continue
+            return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds)
         if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
             ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
             continue
@@ -646,8 +662,8 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
     return Outcome.CONTACT, message(f"lam = {c.lam(X):.6g}" if tests is not None else "the start")
 
 
-def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any,
-                 ds: float) -> tuple[Outcome, str]:
+def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any, ds: float,
+                 message: str | None = None) -> tuple[Outcome, str]:
     """End the branch at the Hopf point ``f`` where its cycles shrank to an equilibrium (a fold test changes sign
     there only because the discrete family runs on through zero amplitude, back along itself): the events before
     it in the step are inserted, the Hopf point is the last row (a HOPF, located or bracketed as the fold was), and
@@ -661,13 +677,30 @@ def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], 
     run.special.append(SpecialPoint(type="HOPF", lam=lam, index=len(run.points),
                                     spectrum=np.asarray(f.analysis["spectrum"]), located=f.located, residual=f.residual,
                                     lam_error=f.lam_error, state=len(run.special_states) - 1, **data))
-    message = (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where the family ends (its "
-               "equilibria continue there)")
+    message = message or (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where the family "
+                          "ends (its equilibria continue there)")
     # the end goes into the step itself: a run interrupted after writing it resumes to this end, not past it
     state = {"ended": str(Outcome.ENDED_AT_HOPF), "message": message}
     if not run.accept(rec, f.point, X, f.tangent, c.tests(f.analysis, f.tangent_lam), ds, state):
         return Outcome.STOPPED, "stopped by the callback"
     return Outcome.ENDED_AT_HOPF, message
+
+
+def _end_collapsed(run: _Run, X: Any, Xn: Any, lin: Any, tau_n: Any, iterations: int,
+                   ds: float) -> tuple[Outcome, str]:
+    """End the branch where its step from X collapsed onto the equilibrium Xn (:meth:`Curve.collapsed`) at the
+    shortest step allowed: the family ends at a Hopf point between X and Xn, reported at Xn (the equilibrium,
+    period the guess's) as bracketed, not located, with the bracket's span in lam as its error."""
+    c = run.curve
+    an = c.analyse(Xn, lin, tau_n)
+    tangent_lam = run.tangent_lam(tau_n)
+    lam, lam_before = float(c.lam(Xn)), float(c.lam(X))
+    f = Found("HOPF", Xn, an, False, math.nan, {}, iterations=iterations, s=ds, tangent_lam=tangent_lam,
+              tangent=tau_n, lam_error=abs(lam - lam_before))
+    message = (f"the cycles collapsed onto an equilibrium between lam = {lam_before:.6g} (the last cycle) and "
+               f"{lam:.6g} (no cycle in a step of ds = {ds:.3g}): the family ends at a Hopf point in that interval "
+               f"(its equilibria continue there)")
+    return _end_at_hopf(run, f, c.family_ends(Xn, X, Xn) or {}, [], X, ds, message)
 
 
 def _own_member(run: _Run, f: Found) -> None:

@@ -336,3 +336,65 @@ def test_an_interrupted_end_at_a_hopf_point_resumes_to_the_same_end(tmp_path):
     assert again.outcome is Outcome.ENDED_AT_HOPF and len(again) == len(ref), (again.message, len(again))
     assert [(s.type, s.index) for s in again.special] == [(s.type, s.index) for s in ref.special]
     np.testing.assert_allclose(again.lam, ref.lam, rtol=0, atol=1e-12)
+
+
+def _scaled_sub(scale):
+    """The subcritical Stuart-Landau field in states scaled by ``scale`` (cycles of radius scale * r, r^2 = q on
+    lam = q^2 - q): the same dynamics at another size of the states."""
+    def field(x, lam, w):
+        return scale * stuart_landau_sub(x / scale, lam, w)
+    return field
+
+
+@pytest.mark.parametrize("scale", [0.03, 0.01, 0.001])
+def test_a_small_subcritical_family_ends_at_its_hopf_point_instead_of_sliding_onto_the_equilibrium(scale):
+    """The subcritical case above with states of size 0.03 and below (a reviewer's case): the step past the Hopf
+    point lam = 0 converged on the equilibrium, a constant orbit (amplitude 1e-17, then 1e-126), which solves the
+    collocation equations with any period, and the branch crept on along it for 35 points with no event and no
+    warning.  Every row but the last is a cycle of the family, and the branch ends at its Hopf point: located, or
+    bracketed with an error bar that covers lam = 0."""
+    from gfbjax.cont import start_from_function
+
+    prob = CycleProblem(_scaled_sub(scale), 2, jnp.asarray(1.0))
+    st = CycleSettings(m=4, N=10, ds=0.05, ds_max=0.1, max_points=40, lam_min=-0.5, lam_max=0.6, direction=1)
+    r0 = scale * np.sqrt(0.3)
+    start = start_from_function(lambda t: r0 * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                2 * np.pi, 0.3 ** 2 - 0.3, st)
+    br = continue_cycles(prob, st, start)
+    assert br.outcome is Outcome.ENDED_AT_HOPF, br.message
+    q = (br.l2[:-1] / scale) ** 2
+    np.testing.assert_allclose(br.lam[:-1], q ** 2 - q, rtol=0, atol=1e-9)
+    assert np.all(q > 1e-8) and np.all(np.diff(br.lam) > 0)
+    [hopf] = br.special
+    assert hopf.type == "HOPF" and hopf.index == len(br) - 1
+    assert abs(hopf.lam) < (1e-6 if hopf.located else hopf.lam_error), hopf
+    assert abs(hopf.period - 2 * np.pi) < 1e-6
+
+
+def test_a_correction_that_lands_on_the_equilibrium_finds_no_cycle():
+    """correct_cycle with a pseudo-arclength constraint whose step passes the Hopf point of the small subcritical
+    family: Newton converges to the constant orbit (the constraint's period term makes that system regular), which
+    is no cycle: NO_SOLUTION.  A shorter step converges on the family (lam = q^2 - q)."""
+    from gfbjax.cont import Scheme, correct_cycle, orbit_from_function, palc_constraint, uniform_mesh
+    from gfbjax.cont import _collocation as col
+
+    scale, scheme = 0.03, Scheme(4)
+    prob = CycleProblem(_scaled_sub(scale), 2, jnp.asarray(1.0))
+
+    def circle(q):
+        r = scale * np.sqrt(q)
+        return orbit_from_function(lambda t: r * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                   2 * np.pi, q * q - q, scheme, uniform_mesh(10))
+
+    base = circle(0.04)
+    d = col.add(base, col.scaled(circle(0.06), -1.0))
+    tau = col.scaled(d, 1.0 / float(jnp.sqrt(col.inner(d, d, scheme) + d.T ** 2 + d.lam ** 2)))
+    outcomes = {}
+    for ds in (0.02, 0.04):
+        guess = col.add(base, col.scaled(tau, ds))
+        sol, lin = correct_cycle(prob, guess, palc_constraint(base, tau, ds, base), settings=CycleSettings(m=4, N=10))
+        outcomes[ds] = sol.outcome
+        if ds == 0.02:
+            q = float(col.l2_norm(sol.x, scheme) / scale) ** 2
+            assert sol.converged and abs(float(sol.x.lam) - (q * q - q)) < 1e-9
+    assert outcomes[0.04] is Outcome.NO_SOLUTION and lin is None, outcomes
