@@ -304,11 +304,12 @@ def evaluate(orbit: Orbit, scheme: Scheme, per_interval: int = 8) -> tuple[np.nd
     return np.append(t, 1.0), np.vstack([X, np.asarray(orbit.xm[-1])[None]])
 
 
-#: An orbit whose amplitude (:func:`amplitude`) is at most this fraction of a reference orbit's has shrunk to an
-#: equilibrium against it: a fold of cycles located at such a point is the family's end at a Hopf point
-#: (:meth:`~._cycles.CycleCurve.family_ends`), and a correction that converges to such an orbit has collapsed
-#: (:func:`collapsed`).  On a family born at a Hopf point the amplitude grows like sqrt|lam - lam_H|, so 1e-3 of
-#: the reference's amplitude is within ~1e-6 of the reference's distance to the Hopf point.
+#: An orbit whose amplitude (:func:`amplitude`), or whose distance from its own half-period shift
+#: (:func:`half_period_defect`), is at most this fraction of a reference orbit's has shrunk onto an equilibrium or
+#: onto a cycle of half its period (:func:`collapsed`): a fold of cycles located at such a point is the family's end
+#: at a Hopf or period-doubling point (:meth:`~._cycles.CycleCurve.family_ends`).  On a family born at such a point
+#: the amplitude (distance) grows like sqrt|lam - lam_0|, so 1e-3 of the reference's is within ~1e-6 of the
+#: reference's distance to that point.
 AMPLITUDE_END = 1e-3
 
 
@@ -321,14 +322,36 @@ def amplitude(orbit: Orbit) -> np.ndarray:
     return np.max(np.ptp(nodes, axis=-2), axis=-1)
 
 
-def collapsed(orbit: Orbit, guess: Orbit) -> np.ndarray:
-    """Whether ``orbit``, a converged correction of ``guess``, is an equilibrium rather than a cycle: its
-    amplitude is at most :data:`AMPLITUDE_END` of the guess's, which moves.  A constant orbit solves the
-    collocation equations (27)-(28) with any period, and the phase condition (29) vanishes on it, so Newton can
-    converge there from a guess near (or past) a Hopf point, where a family of cycles shrinks to zero amplitude;
-    the result is no cycle.  Elementwise for stacked orbits, as :func:`amplitude`."""
-    a0 = amplitude(guess)
-    return (a0 > 0.0) & (amplitude(orbit) <= AMPLITUDE_END * a0)
+def half_period_defect(orbit: Orbit) -> float:
+    """The largest |x(t + 1/2) - x(t)| over the node times t and the components, in the states' units (t in
+    units of the period): zero for an orbit that repeats itself after half its period, a cycle of period T/2
+    traversed twice (and the constant orbit).  One orbit."""
+    mesh = np.asarray(orbit.mesh, float)
+    U = np.asarray(orbit.nodes())  # (N, m+1, n)
+    nodes = np.linspace(0.0, 1.0, U.shape[1])
+    t = np.mod((mesh[:-1, None] + np.diff(mesh)[:, None] * nodes[None, :]).ravel() + 0.5, 1.0)
+    j = np.clip(np.searchsorted(mesh, t, side="right") - 1, 0, len(mesh) - 2)
+    B = _lagrange_matrices(nodes, (t - mesh[j]) / (mesh[j + 1] - mesh[j]))[0]
+    shifted = np.einsum("qi,qin->qn", B, U[j])
+    return float(np.max(np.abs(shifted - U.reshape(-1, U.shape[-1]))))
+
+
+def collapsed(orbit: Orbit, guess: Orbit) -> str | None:
+    """What ``orbit``, a converged correction of ``guess``, is instead of a cycle of period T, or None when it is
+    one: ``"equilibrium"`` when its amplitude is at most :data:`AMPLITUDE_END` of the guess's (which moves), and
+    ``"half period"`` when it repeats itself after half its period (:func:`half_period_defect`, by the same
+    fraction of the guess's).  A constant orbit solves the collocation equations (27)-(28) with any period, and a
+    cycle of period T/2 traversed twice solves them with period T; the phase condition (29) does not exclude them,
+    so Newton can converge there from a guess near (or past) the point where a family shrinks onto them: a Hopf
+    point, where cycles shrink to an equilibrium, and a period doubling, where the doubled cycles shrink onto the
+    cycle of half their period."""
+    a0 = float(amplitude(guess))
+    if a0 > 0.0 and float(amplitude(orbit)) <= AMPLITUDE_END * a0:
+        return "equilibrium"
+    d0 = half_period_defect(guess)
+    if d0 > 0.0 and half_period_defect(orbit) <= AMPLITUDE_END * d0:
+        return "half period"
+    return None
 
 
 # --------------------------------------------------------------------------

@@ -315,7 +315,7 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     _check_moves(orbit, "the orbit")
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     sol, lin = bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
-    if bool(sol.converged) and col.collapsed(sol.x, orbit):
+    if bool(sol.converged) and col.collapsed(sol.x, orbit) is not None:
         code = jnp.asarray(Outcome.NO_SOLUTION.code, jnp.asarray(sol.code).dtype)
         return eqx.tree_at(lambda r: r.code, sol, code), None
     return sol, lin
@@ -468,15 +468,22 @@ class CycleCurve(Curve):
         return col.Orbit(*(jnp.asarray(state[k], float) for k in ("mesh", "xm", "xi", "T", "lam")))
 
     def family_ends(self, X, left, right):
-        # amplitude (largest peak-to-peak over the components) at the fold against the step's ends: a family
-        # that shrinks to its Hopf point passes through zero amplitude, a true fold keeps its size
-        if not any(col.collapsed(X, end) for end in (left, right)):
-            return None
-        T = float(X.T)
-        return {"period": T, "omega": 2.0 * math.pi / T}
+        # the fold against the step's ends: a family that shrinks to its Hopf point passes through zero amplitude,
+        # a period-doubled family that shrinks onto the cycle of half its period through zero distance from its
+        # half-period shift (and runs back along itself, the same cycles shifted); a true fold keeps its size
+        onto = next((k for k in (col.collapsed(X, end) for end in (left, right)) if k is not None), None)
+        return None if onto is None else self._end_data(X, onto)
 
     def collapsed(self, X, guess):
-        return bool(col.collapsed(X, guess))
+        onto = col.collapsed(X, guess)
+        return None if onto is None else self._end_data(X, onto)
+
+    @staticmethod
+    def _end_data(X, onto):
+        T = float(X.T)
+        if onto == "equilibrium":  # a Hopf point, whose frequency is the family's there
+            return {"type": "HOPF", "period": T, "omega": 2.0 * math.pi / T}
+        return {"type": "PD", "period": T}
 
     def special(self, kind, X, an, located=True, ends=None):
         c = classify(kind, an["spectrum"], self.problem.n_trivial)

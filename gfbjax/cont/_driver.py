@@ -133,15 +133,18 @@ class Curve(abc.ABC):
 
     def family_ends(self, X: Any, left: Any, right: Any) -> dict[str, Any] | None:
         """Whether a fold located at X between the step's ends ``left`` and ``right`` is no fold but the end of
-        the family (cycles that shrink to an equilibrium: a Hopf point, where the family is born); then the
-        Hopf point's fields (``omega``, ``period``), else None (the default: a curve whose folds are folds)."""
+        the family, where it was born (cycles that shrink to an equilibrium: a Hopf point; period-doubled cycles
+        that shrink onto the cycle of half their period: a period doubling); then the end's special point fields
+        (``type`` "HOPF" or "PD", ``period``, ``omega`` for a Hopf point), else None (the default: a curve whose
+        folds are folds)."""
         return None
 
-    def collapsed(self, X: Any, guess: Any) -> bool:
+    def collapsed(self, X: Any, guess: Any) -> dict[str, Any] | None:
         """Whether X, a converged correction of ``guess``, is no member of the curve but a degenerate solution of
-        its equations (cycles: an equilibrium, the constant orbit, which solves them with any period); False by
-        default."""
-        return False
+        its equations (cycles: the constant orbit, which solves them with any period, or a cycle of half the
+        period traversed twice); then, as :meth:`family_ends`, the fields of the family's end there, else None
+        (the default)."""
+        return None
 
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
@@ -349,16 +352,18 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         Xn, tau_n = sol.x, sol.aux
         if direction is None:  # natural parameter: orient the corrector's tangent by the stepping direction
             tau_n = c.scale(tau_n, float(s.direction))
-        if c.collapsed(Xn, X):
-            # the step passed the Hopf point where the family shrinks to zero amplitude and the correction landed
-            # on the equilibrium (which solves the cycles' equations with any period, and has no fold to signal
-            # it): shorter steps approach the end until the halvings are spent, then the branch ends there
+        onto = c.collapsed(Xn, X)
+        if onto is not None:
+            # the step passed the point where the family is born (a Hopf point: zero amplitude; a period doubling:
+            # the cycle of half the period) and the correction landed on what it was born from (which solves the
+            # cycles' equations too, with no fold to signal it): shorter steps approach the end until the halvings
+            # are spent, then the branch ends there
             if refined < s.event_refine and 0.5 * ds >= s.ds_min:
                 if refined == 0:
                     ds_unrefined = ds
                 ds, refined = 0.5 * ds, refined + 1
                 continue
-            return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds)
+            return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds, onto)
         if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
             ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
             continue
@@ -409,7 +414,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         ending = next(((f, d) for f in found if f.kind == "LPC" and (f.located or np.isfinite(f.residual))
                        for d in [c.family_ends(f.point, X, Xn)] if d is not None), None)
         if ending is not None:
-            return _end_at_hopf(run, *ending, found, X, ds)
+            return _end_of_family(run, *ending, found, X, ds)
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come
@@ -662,45 +667,63 @@ def _monitor_end(run: _Run, X: Any, tau: Any, ds: float, tests: dict | None, tes
     return Outcome.CONTACT, message(f"lam = {c.lam(X):.6g}" if tests is not None else "the start")
 
 
-def _end_at_hopf(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any, ds: float,
-                 message: str | None = None) -> tuple[Outcome, str]:
-    """End the branch at the Hopf point ``f`` where its cycles shrank to an equilibrium (a fold test changes sign
-    there only because the discrete family runs on through zero amplitude, back along itself): the events before
-    it in the step are inserted, the Hopf point is the last row (a HOPF, located or bracketed as the fold was), and
-    the rest is not recorded."""
+#: The outcome and the wording of a family's end, by the type of the point where it was born.
+_ENDS = {"HOPF": (Outcome.ENDED_AT_HOPF, "shrank to an equilibrium", "a Hopf point", "its equilibria"),
+         "PD": (Outcome.ENDED_AT_PD, "shrank onto the cycle of half their period", "a period doubling",
+                "the cycles of half the period")}
+
+
+def _end_of_family(run: _Run, f: Found, data: dict[str, Any], found: list[Found], X: Any, ds: float,
+                   message: str | None = None) -> tuple[Outcome, str]:
+    """End the branch at the point ``f`` where its cycles shrank onto what they were born from (``data["type"]``:
+    a Hopf point, or a period doubling of the cycles of half the period): a fold test changes sign there only
+    because the discrete family runs on through it, back along itself (the same cycles: the amplitude's or the
+    half-period shift's sign flips).  The events before it in the step are inserted, except branch points of
+    cycles within its bracket (at a period doubling the doubled cycle's multiplier -1 squares to +1: the BPC test
+    vanishes at the end itself); the end is the last row (located or bracketed as the fold was), and the rest is
+    not recorded."""
     c = run.curve
+    data = dict(data)
+    kind = data.pop("type")
+    outcome, shrank, point, continuing = _ENDS[kind]
+    lam = float(c.lam(f.point))
+    reach = f.lam_error if np.isfinite(f.lam_error) else 0.0
     for g in sorted((g for g in found if g is not f and np.isfinite(g.s) and g.s < f.s), key=lambda g: g.s):
+        g_lam = g.lam if g.lam is not None else float(c.lam(g.point))
+        g_reach = g.lam_error if np.isfinite(g.lam_error) else 0.0
+        if kind == "PD" and g.kind == "BPC" and abs(g_lam - lam) <= max(reach, g_reach, 1e-8 * max(1.0, abs(lam))):
+            continue
         _insert(run, g)
     rec = c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam)
     run.special_states.append(c.state(f.point))
-    lam = float(c.lam(f.point))
-    run.special.append(SpecialPoint(type="HOPF", lam=lam, index=len(run.points),
+    run.special.append(SpecialPoint(type=kind, lam=lam, index=len(run.points),
                                     spectrum=np.asarray(f.analysis["spectrum"]), located=f.located, residual=f.residual,
                                     lam_error=f.lam_error, state=len(run.special_states) - 1, **data))
-    message = message or (f"the cycles shrank to an equilibrium at lam = {lam:.6g}: a Hopf point, where the family "
-                          "ends (its equilibria continue there)")
+    message = message or (f"the cycles {shrank} at lam = {lam:.6g}: {point}, where the family ends ({continuing} "
+                          "continue there)")
     # the end goes into the step itself: a run interrupted after writing it resumes to this end, not past it
-    state = {"ended": str(Outcome.ENDED_AT_HOPF), "message": message}
+    state = {"ended": str(outcome), "message": message}
     if not run.accept(rec, f.point, X, f.tangent, c.tests(f.analysis, f.tangent_lam), ds, state):
         return Outcome.STOPPED, "stopped by the callback"
-    return Outcome.ENDED_AT_HOPF, message
+    return outcome, message
 
 
-def _end_collapsed(run: _Run, X: Any, Xn: Any, lin: Any, tau_n: Any, iterations: int,
-                   ds: float) -> tuple[Outcome, str]:
-    """End the branch where its step from X collapsed onto the equilibrium Xn (:meth:`Curve.collapsed`) at the
-    shortest step allowed: the family ends at a Hopf point between X and Xn, reported at Xn (the equilibrium,
-    period the guess's) as bracketed, not located, with the bracket's span in lam as its error."""
+def _end_collapsed(run: _Run, X: Any, Xn: Any, lin: Any, tau_n: Any, iterations: int, ds: float,
+                   data: dict[str, Any]) -> tuple[Outcome, str]:
+    """End the branch where its step from X collapsed onto Xn (:meth:`Curve.collapsed`: the equilibrium, or the
+    cycle of half the period) at the shortest step allowed: the family ends between X and Xn at the point where
+    it was born, reported at Xn as bracketed, not located, with the bracket's span in lam as its error."""
     c = run.curve
     an = c.analyse(Xn, lin, tau_n)
     tangent_lam = run.tangent_lam(tau_n)
     lam, lam_before = float(c.lam(Xn)), float(c.lam(X))
-    f = Found("HOPF", Xn, an, False, math.nan, {}, iterations=iterations, s=ds, tangent_lam=tangent_lam,
+    f = Found(data["type"], Xn, an, False, math.nan, {}, iterations=iterations, s=ds, tangent_lam=tangent_lam,
               tangent=tau_n, lam_error=abs(lam - lam_before))
-    message = (f"the cycles collapsed onto an equilibrium between lam = {lam_before:.6g} (the last cycle) and "
-               f"{lam:.6g} (no cycle in a step of ds = {ds:.3g}): the family ends at a Hopf point in that interval "
-               f"(its equilibria continue there)")
-    return _end_at_hopf(run, f, c.family_ends(Xn, X, Xn) or {}, [], X, ds, message)
+    _, shrank, point, continuing = _ENDS[data["type"]]
+    message = (f"the cycles {shrank} between lam = {lam_before:.6g} (the last cycle) and {lam:.6g} (no cycle in a "
+               f"step of ds = {ds:.3g}): the family ends at {point} in that interval ({continuing} continue "
+               "there)")
+    return _end_of_family(run, f, data, [], X, ds, message)
 
 
 def _own_member(run: _Run, f: Found) -> None:

@@ -317,7 +317,9 @@ def hopf_point(problem: EquilibriumProblem, branch: Branch, which: int = 0) -> H
                          "problem the branch was computed with")
     y = np.append(x, float(st["lam"]))
     ev, V = _eig(problem, y)
-    cand = np.where(ev.imag > IMAG_TOL)[0]
+    # complex in units of the spectral radius, as the detection classified it (a slow system's Hopf pair has an
+    # imaginary part far below IMAG_TOL in its own time units)
+    cand = np.where(_in_units(ev)[0].imag > IMAG_TOL)[0]
     if cand.size == 0:  # the branch's Hopf point is not one of this problem (another args or field)
         raise ValueError(f"f_x has no complex eigenvalue at the HOPF point near lam = {h.lam:.6g}: pass the problem "
                          "(f and args) the branch was computed with")

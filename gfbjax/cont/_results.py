@@ -31,7 +31,9 @@ class Outcome(enum.StrEnum):
     Branches: ``REACHED_END`` (the parameter bound, reached exactly); ``MAX_POINTS``; ``STEP_TOO_SMALL`` (the
     corrector failed down to the smallest step; the message gives the corrector's own outcome);
     ``START_FAILED``; ``STOPPED`` (by the callback); ``INTERRUPTED`` (SIGINT/SIGTERM: the computed part is kept);
-    ``ENDED_AT_HOPF`` (a family of cycles shrank to an equilibrium: it ends at that Hopf point, its last row).
+    ``ENDED_AT_HOPF`` (a family of cycles shrank to an equilibrium: it ends at that Hopf point, its last row);
+    ``ENDED_AT_PD`` (a period-doubled family shrank onto the cycle of half its period: it ends at that period
+    doubling, its last row).
     Physics: ``CONTACT`` (the film closed: no equilibrium or cycle with h_min > h_rub); ``RUB`` (a transient
     touched the foil); ``COMPLETED`` (a transient ran to its end); ``INTEGRATION_FAILED`` (the time integrator
     gave up); ``UNSTABLE`` (a design schedule stopped at an unstable optimum); ``NO_SOLUTION`` (no equilibrium or
@@ -56,6 +58,7 @@ class Outcome(enum.StrEnum):
     NO_SOLUTION = "no_solution"
     INTEGRATION_FAILED = "integration_failed"
     ENDED_AT_HOPF = "ended_at_hopf"
+    ENDED_AT_PD = "ended_at_pd"
     RUNNING = "running"  # inside a compiled loop only: the iteration goes on
 
     @property
@@ -72,7 +75,7 @@ class Outcome(enum.StrEnum):
         """The computation did what was asked (a converged solve, a branch that reached its end or its point
         budget, a completed transient)."""
         return self in (Outcome.CONVERGED, Outcome.REACHED_END, Outcome.MAX_POINTS, Outcome.COMPLETED,
-                        Outcome.ENDED_AT_HOPF)
+                        Outcome.ENDED_AT_HOPF, Outcome.ENDED_AT_PD)
 
 
 _MEMBERS = list(Outcome)

@@ -145,3 +145,25 @@ def ring_pattern(k):
             jj = j % k
             P[2 * i:2 * i + 2, 2 * jj:2 * jj + 2] = True
     return P
+
+
+def pd_family(x, lam, p):
+    """A period doubling with its period-doubled family in closed form, in 4 states.  p = (w, mu, sat): the
+    unit-circle oscillator (u, v) of ``half_turn_field`` (period T = 2 pi / w) drives z, which turns by half a
+    revolution per period, with gain g = lam - mu - sat |z|^2:
+
+        z' = [ (w/2) J + g I + mu S(u, v) ] z,   S = [[u, v], [v, -u]].
+
+    In the frame turning at w/2 the z-system is z' = (g I + mu diag(1, -1)) z.  On z = 0 (period T) the non-trivial
+    multipliers are exp(-2T) and -exp((lam - mu +- mu) T): a PD at lam = 0.  The doubled cycles (period 2T) are the
+    frame's equilibria on its first axis, lam - sat |z|^2 = 0: |z| = sqrt(lam / sat), for lam > 0 when sat > 0
+    (supercritical), lam < 0 when sat < 0; peak-to-peak of z1 or z2 over 2T: 2 |z|.  The cycle at z and at -z is
+    one cycle shifted by T."""
+    w, mu, sat = p[0], p[1], p[2]
+    u, v, z1, z2 = x[0], x[1], x[2], x[3]
+    r2 = u * u + v * v
+    g = lam - mu - sat * (z1 * z1 + z2 * z2)
+    rot = 0.5 * w
+    dz1 = (g + mu * u) * z1 + (mu * v - rot) * z2
+    dz2 = (mu * v + rot) * z1 + (g - mu * u) * z2
+    return jnp.stack([u - w * v - u * r2, w * u + v - v * r2, dz1, dz2])

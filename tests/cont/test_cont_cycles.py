@@ -398,3 +398,44 @@ def test_a_correction_that_lands_on_the_equilibrium_finds_no_cycle():
             q = float(col.l2_norm(sol.x, scheme) / scale) ** 2
             assert sol.converged and abs(float(sol.x.lam) - (q * q - q)) < 1e-9
     assert outcomes[0.04] is Outcome.NO_SOLUTION and lin is None, outcomes
+
+
+def _pd_branches(sat):
+    """cont_systems.pd_family (w = 2 pi, mu = 0.5): the period-1 cycles across the PD at lam = 0, and the doubled
+    family switched onto there, followed to |lam| = 0.3."""
+    from cont_systems import pd_family
+    from gfbjax.cont import start_from_function, start_from_pd
+
+    prob = CycleProblem(pd_family, 4, jnp.asarray([2 * np.pi, 0.5, sat]))
+    st = CycleSettings(m=4, N=12, ds=0.05, ds_max=0.1, max_points=20, lam_min=-0.3, lam_max=0.3, save_states=True)
+    start = start_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), 0 * t, 0 * t], 1),
+                                1.0, -0.3, st)
+    single = continue_cycles(prob, st, start)
+    st2 = CycleSettings(m=4, N=24, ds=0.02, ds_max=0.05, max_points=30, lam_min=-0.3, lam_max=0.3,
+                        save_states=True)
+    return prob, continue_cycles(prob, st2, start_from_pd(prob, single, 0, st2))
+
+
+@pytest.mark.parametrize("sat", [1.0, -1.0, 1e4])
+def test_a_period_doubled_family_followed_back_ends_at_its_pd_point(sat):
+    """The doubled family of pd_family (|z| = sqrt(lam / sat), period 2), followed back from |lam| = 0.3 to the PD
+    point at lam = 0 (a reviewer's class: families that shrink onto what they were born from).  It used to report
+    a fold of cycles (LPC) and a branch point (BPC) there and run back along itself (the same cycles shifted by a
+    period), or, with small z (sat = 1e4), slide on along the period-1 cycle traversed twice, reported as
+    period-doubled cycles, to the end of the range with no event.  It ends at the PD point: located, or bracketed
+    with an error bar that covers lam = 0; every row before it is a doubled cycle of the family."""
+    from gfbjax.cont import start_from_branch
+
+    prob, doubled = _pd_branches(sat)
+    assert doubled.outcome is Outcome.REACHED_END and not doubled.special, (doubled.message, doubled.special)
+    st = CycleSettings(m=4, N=24, ds=0.02, ds_max=0.05, max_points=40, lam_min=-0.3, lam_max=0.3,
+                       direction=-int(np.sign(sat)))
+    br = continue_cycles(prob, st, start_from_branch(doubled, -1))
+    assert br.outcome is Outcome.ENDED_AT_PD, br.message
+    [pd] = br.special
+    assert pd.type == "PD" and pd.index == len(br) - 1, br.special
+    assert abs(pd.lam) < (1e-6 if pd.located else pd.lam_error), pd
+    z_pp = (br.xmax - br.xmin)[:-1, 2]
+    np.testing.assert_allclose(z_pp, 2 * np.sqrt(br.lam[:-1] / sat), rtol=1e-3)
+    np.testing.assert_allclose(br.period, 2.0, rtol=1e-9)
+    assert np.all(np.diff(br.lam) * np.sign(sat) < 0)

@@ -536,6 +536,26 @@ def test_a_hopf_point_in_slow_time_units_is_a_hopf_point(s):
     np.testing.assert_allclose(hopf.period, 2 * np.pi / s, rtol=1e-9)
 
 
+@pytest.mark.parametrize("c", [1.0, 1e-9])
+def test_hopf_point_returns_the_crossing_pair_in_slow_time_units(c):
+    """The Hopf normal form in (x, y) beside a damped oscillator in (z, w) (eigenvalues c(-1 +- 50 i)), every rate
+    times c (a new user's audit): with c = 1e-9 the branch reported the HOPF with omega = c, but hopf_point kept
+    only pairs with an imaginary part above an absolute 1e-8 and returned the damped oscillator (omega = 50 c, v
+    in the (z, w) plane), so start_from_hopf would start on the wrong mode with the wrong period."""
+    from gfbjax.cont import hopf_point
+
+    def f(u, lam, args):
+        x, y, z, w = u
+        r2 = x * x + y * y
+        return c * jnp.array([lam * x - y - x * r2, x + lam * y - y * r2, -z - 50 * w, 50 * z - w])
+
+    prob = EquilibriumProblem(f, 4)
+    br = continue_equilibria(prob, EquilibriumSettings(ds=0.05, max_points=60, lam_max=0.5), np.zeros(4), -0.5)
+    h = hopf_point(prob, br)
+    assert abs(h.lam) < 1e-9
+    np.testing.assert_allclose(h.omega, c, rtol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(h.v[:2]), 1.0, rtol=1e-9)
+
 def test_a_correction_landing_on_a_branch_point_costs_no_branch():
     """x' = lam - x^2, y' = -y + x, z' = (0.02 - x) z - z^3: a BP at lam = 0.02^2 = 4e-4 next to the fold at lam = 0
     (a new user's audit).  A localisation correction converged exactly onto the BP, where the tangent's bordered
