@@ -306,7 +306,7 @@ def evaluate(orbit: Orbit, scheme: Scheme, per_interval: int = 8) -> tuple[np.nd
 
 #: An orbit whose amplitude (:func:`amplitude`), or whose distance from its own half-period shift
 #: (:func:`half_period_defect`), is at most this fraction of a reference orbit's has shrunk onto an equilibrium or
-#: onto a cycle of half its period (:func:`collapsed`): a fold of cycles located at such a point is the family's end
+#: onto a cycle of half its period (:func:`shrunk`): a fold of cycles located at such a point is the family's end
 #: at a Hopf or period-doubling point (:meth:`~._cycles.CycleCurve.family_ends`).  On a family born at such a point
 #: the amplitude (distance) grows like sqrt|lam - lam_0|, so 1e-3 of the reference's is within ~1e-6 of the
 #: reference's distance to that point.
@@ -322,36 +322,71 @@ def amplitude(orbit: Orbit) -> np.ndarray:
     return np.max(np.ptp(nodes, axis=-2), axis=-1)
 
 
-def half_period_defect(orbit: Orbit) -> float:
-    """The largest |x(t + 1/2) - x(t)| over the node times t and the components, in the states' units (t in
-    units of the period): zero for an orbit that repeats itself after half its period, a cycle of period T/2
-    traversed twice (and the constant orbit).  One orbit."""
+def half_period_odd(orbit: Orbit) -> np.ndarray:
+    """x(t) - x(t + 1/2) at the node times t (t in units of the period), shape (N (m+1), n), in the states'
+    units: the part of the orbit that changes sign under a shift by half its period.  Zero for an orbit that
+    repeats itself after half its period (a cycle of period T/2 traversed twice, and the constant orbit); it
+    changes sign where a family passes through such an orbit (the small cycles near a Hopf point, the doubled ones
+    near a period doubling: x = x_0 + eps w with w(t + 1/2) = -w(t), and eps changes sign).  One orbit."""
     mesh = np.asarray(orbit.mesh, float)
     U = np.asarray(orbit.nodes())  # (N, m+1, n)
     nodes = np.linspace(0.0, 1.0, U.shape[1])
     t = np.mod((mesh[:-1, None] + np.diff(mesh)[:, None] * nodes[None, :]).ravel() + 0.5, 1.0)
     j = np.clip(np.searchsorted(mesh, t, side="right") - 1, 0, len(mesh) - 2)
     B = _lagrange_matrices(nodes, (t - mesh[j]) / (mesh[j + 1] - mesh[j]))[0]
-    shifted = np.einsum("qi,qin->qn", B, U[j])
-    return float(np.max(np.abs(shifted - U.reshape(-1, U.shape[-1]))))
+    return U.reshape(-1, U.shape[-1]) - np.einsum("qi,qin->qn", B, U[j])
 
 
-def collapsed(orbit: Orbit, guess: Orbit) -> str | None:
-    """What ``orbit``, a converged correction of ``guess``, is instead of a cycle of period T, or None when it is
-    one: ``"equilibrium"`` when its amplitude is at most :data:`AMPLITUDE_END` of the guess's (which moves), and
-    ``"half period"`` when it repeats itself after half its period (:func:`half_period_defect`, by the same
-    fraction of the guess's).  A constant orbit solves the collocation equations (27)-(28) with any period, and a
-    cycle of period T/2 traversed twice solves them with period T; the phase condition (29) does not exclude them,
-    so Newton can converge there from a guess near (or past) the point where a family shrinks onto them: a Hopf
-    point, where cycles shrink to an equilibrium, and a period doubling, where the doubled cycles shrink onto the
-    cycle of half their period."""
-    a0 = float(amplitude(guess))
+def half_period_defect(orbit: Orbit) -> float:
+    """The largest |x(t + 1/2) - x(t)| over the node times and the components (:func:`half_period_odd`)."""
+    return float(np.max(np.abs(half_period_odd(orbit))))
+
+
+def passed_through(a: Orbit, b: Orbit) -> bool:
+    """Whether the family went from ``a`` to ``b`` (two orbits on the same mesh, consecutive on a branch, phase
+    aligned by the phase condition) through an orbit that repeats itself after half its period: their
+    :func:`half_period_odd` parts point in opposite directions.  Such a step passed the point where the family was
+    born (a Hopf point, a period doubling) and ran on along its mirror image, the same cycles shifted by half a
+    period."""
+    da, db = half_period_odd(a), half_period_odd(b)
+    return da.shape == db.shape and float(np.vdot(da, db)) < 0.0
+
+
+def shrunk(orbit: Orbit, reference: Orbit) -> str | None:
+    """What ``orbit`` has shrunk onto against ``reference``, or None: ``"equilibrium"`` when its amplitude is at
+    most :data:`AMPLITUDE_END` of the reference's (which moves), ``"half period"`` when its distance from its own
+    half-period shift (:func:`half_period_defect`) is at most that fraction of the reference's."""
+    a0 = float(amplitude(reference))
     if a0 > 0.0 and float(amplitude(orbit)) <= AMPLITUDE_END * a0:
         return "equilibrium"
-    d0 = half_period_defect(guess)
+    d0 = half_period_defect(reference)
     if d0 > 0.0 and half_period_defect(orbit) <= AMPLITUDE_END * d0:
         return "half period"
     return None
+
+
+#: A converged orbit within this many Newton step tolerances (times 1 + max|x|) of the constant orbit, or of its
+#: own half-period shift, is that orbit as far as the corrector can tell (the collapsed corrections seen end at
+#: rounding level, 1e-15 of their states, and at most ~1e-10 absolute).
+COLLAPSE_TOLS = 10.0
+
+
+def collapsed(orbit: Orbit, guess: Orbit, step_tol: float) -> str | None:
+    """What ``orbit``, a converged correction of ``guess`` with Newton step tolerance ``step_tol``, is instead of a
+    cycle of period T, or None when it is one: ``"equilibrium"`` (the constant orbit) or ``"half period"`` (a
+    cycle of period T/2 traversed twice), when it has :func:`shrunk` onto that against the guess and is that
+    orbit to within :data:`COLLAPSE_TOLS` step tolerances.  A constant orbit solves the collocation equations
+    (27)-(28) with any period, and a cycle of period T/2 traversed twice solves them with period T; the phase
+    condition (29) does not exclude them, so Newton can converge there from a guess near (or past) the point where
+    a family shrinks onto them: a Hopf point, where cycles shrink to an equilibrium, and a period doubling, where
+    the doubled cycles shrink onto the cycle of half their period.  A genuine cycle far smaller than its guess
+    (a correction from a distant guess) is not collapsed."""
+    onto = shrunk(orbit, guess)
+    if onto is None:
+        return None
+    size = 1.0 + max(float(np.max(np.abs(np.asarray(orbit.xm)))), float(np.max(np.abs(np.asarray(orbit.xi)))))
+    left = float(amplitude(orbit)) if onto == "equilibrium" else half_period_defect(orbit)
+    return onto if left <= COLLAPSE_TOLS * step_tol * size else None
 
 
 # --------------------------------------------------------------------------

@@ -315,7 +315,7 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     _check_moves(orbit, "the orbit")
     con = col.natural_constraint(orbit, orbit.lam) if con is None else con
     sol, lin = bind_solver(problem, scheme, s).correct(orbit, con, s.newton)
-    if bool(sol.converged) and col.collapsed(sol.x, orbit) is not None:
+    if bool(sol.converged) and col.collapsed(sol.x, orbit, s.newton_step_tol) is not None:
         code = jnp.asarray(Outcome.NO_SOLUTION.code, jnp.asarray(sol.code).dtype)
         return eqx.tree_at(lambda r: r.code, sol, code), None
     return sol, lin
@@ -471,12 +471,15 @@ class CycleCurve(Curve):
         # the fold against the step's ends: a family that shrinks to its Hopf point passes through zero amplitude,
         # a period-doubled family that shrinks onto the cycle of half its period through zero distance from its
         # half-period shift (and runs back along itself, the same cycles shifted); a true fold keeps its size
-        onto = next((k for k in (col.collapsed(X, end) for end in (left, right)) if k is not None), None)
+        onto = next((k for k in (col.shrunk(X, end) for end in (left, right)) if k is not None), None)
         return None if onto is None else self._end_data(X, onto)
 
     def collapsed(self, X, guess):
-        onto = col.collapsed(X, guess)
+        onto = col.collapsed(X, guess, self.settings.newton_step_tol)
         return None if onto is None else self._end_data(X, onto)
+
+    def passed_end(self, X, Xn):
+        return col.passed_through(X, Xn)
 
     @staticmethod
     def _end_data(X, onto):

@@ -146,6 +146,12 @@ class Curve(abc.ABC):
         (the default)."""
         return None
 
+    def passed_end(self, X: Any, Xn: Any) -> bool:
+        """Whether the step from X to Xn ran through the point where the family was born and on along its mirror
+        image (cycles: through zero amplitude at a Hopf point, or through the cycle of half the period at a period
+        doubling: :func:`._collocation.passed_through`); False by default."""
+        return False
+
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
         when the curve does not provide it or the solve fails.  Used to place branch points across the gap where
@@ -364,6 +370,15 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                 ds, refined = 0.5 * ds, refined + 1
                 continue
             return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds, onto)
+        if c.passed_end(X, Xn) and refined < s.event_refine and 0.5 * ds >= s.ds_min:
+            # the step ran through the family's end onto its mirror image (the same cycles): an event between X and
+            # the end has its image beyond it, and the two cancel in the test functions (a fold next to the end is
+            # crossed twice, and its multiplier through +1 is then read as a BPC); shorter steps approach the end
+            # until the halvings are spent, and the last one locates it (a fold, or a BPC, at zero amplitude)
+            if refined == 0:
+                ds_unrefined = ds
+            ds, refined = 0.5 * ds, refined + 1
+            continue
         if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
             ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
             continue
@@ -410,8 +425,10 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                                             f"and {c.lam(Xn):.6g} (the {jump.kind} test function changes sign "
                                             f"across the gap): no step above ds_min = {s.ds_min:g} stays on "
                                             f"this branch")
-        # located, or bracketed (a subcritical family's fold test can jump there): a point at zero amplitude
-        ending = next(((f, d) for f in found if f.kind == "LPC" and (f.located or np.isfinite(f.residual))
+        # located, or bracketed (a subcritical family's fold test can jump there): a fold, or a branch point (the
+        # BPC test vanishes at a Hopf or PD end too: a multiplier exp(i omega T) = 1, or (-1)^2), at zero amplitude
+        # or zero distance from the half-period shift
+        ending = next(((f, d) for f in found if f.kind in ("LPC", "BPC") and (f.located or np.isfinite(f.residual))
                        for d in [c.family_ends(f.point, X, Xn)] if d is not None), None)
         if ending is not None:
             return _end_of_family(run, *ending, found, X, ds)

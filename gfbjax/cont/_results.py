@@ -90,7 +90,9 @@ SPECIAL_TYPES = ("FOLD", "HOPF", "BP", "LPC", "PD", "NS", "BPC")
 class SpecialPoint:
     """A bifurcation found along a branch.
 
-    type: one of :data:`SPECIAL_TYPES`.  lam: the continuation parameter there.  index: row of the point in the
+    type: one of :data:`SPECIAL_TYPES` (on a branch of cycles, a HOPF, or a PD as its last row, is where the
+    family ended, shrunk onto what it was born from: ``Outcome.ENDED_AT_HOPF`` / ``ENDED_AT_PD``; that PD's
+    period is the doubled cycles').  lam: the continuation parameter there.  index: row of the point in the
     branch arrays (a located point is inserted as a row; an unlocated one refers to the first point past the
     event).  period: cycle period (Hopf: 2 pi / omega; NaN for folds of equilibria).  spectrum: the Floquet
     multipliers (cycles) or eigenvalues of df/dx (equilibria) at the point, as in the branch arrays.

@@ -439,3 +439,106 @@ def test_a_period_doubled_family_followed_back_ends_at_its_pd_point(sat):
     np.testing.assert_allclose(z_pp, 2 * np.sqrt(br.lam[:-1] / sat), rtol=1e-3)
     np.testing.assert_allclose(br.period, 2.0, rtol=1e-9)
     assert np.all(np.diff(br.lam) * np.sign(sat) < 0)
+
+
+def _doubled_guess(s0, extra=0):
+    """A doubled cycle of the pd_family kind (period 2: the oscillator turns twice, z once) with |z|^2 = s0."""
+    return lambda t: np.stack([np.cos(4 * np.pi * t), np.sin(4 * np.pi * t), np.sqrt(s0) * np.cos(2 * np.pi * t),
+                               np.sqrt(s0) * np.sin(2 * np.pi * t)] + [0 * t] * extra, 1)
+
+
+def _drive(x, w=2 * np.pi, mu=0.5):
+    """The oscillator and z-rotation of cont_systems.pd_family with the gain left out: (u', v', z-part(g))."""
+    u, v, z1, z2 = x[0], x[1], x[2], x[3]
+    r2, rot = u * u + v * v, 0.5 * w
+    return (jnp.stack([u - w * v - u * r2, w * u + v - v * r2]),
+            lambda g: jnp.stack([(g + mu * u) * z1 + (mu * v - rot) * z2, (mu * v + rot) * z1 + (g - mu * u) * z2]))
+
+
+@pytest.mark.parametrize("a", [0.01, 0.03])
+def test_a_fold_next_to_the_hopf_end_is_passed_before_the_family_ends(a):
+    """r' = r (lam + a r^2 - r^4): a fold of cycles at r^2 = a/2, lam = -a^2/4, close to the family's end at the
+    Hopf point lam = 0 (a new user's audit).  With ds_max = 0.2 one step crossed the fold, zero amplitude and the
+    fold's mirror image (r -> -r, the same cycles): the fold test changed sign twice, the fold's multiplier through
+    +1 was read as a BPC, and the branch ran back over itself to lam_max.  Both are found now, in order."""
+    from gfbjax.cont import start_from_function
+
+    def field(x, lam, w):
+        r2 = x[0] ** 2 + x[1] ** 2
+        g = lam + a * r2 - r2 ** 2
+        return jnp.array([g * x[0] - w * x[1], w * x[0] + g * x[1]])
+
+    st = CycleSettings(m=4, N=10, ds=0.05, ds_max=0.2, max_points=80, lam_min=-0.5, lam_max=1.0, direction=-1)
+    r0 = np.sqrt(0.6)
+    start = start_from_function(lambda t: r0 * np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1),
+                                2 * np.pi, 0.36 - 0.6 * a, st)
+    br = continue_cycles(CycleProblem(field, 2, jnp.asarray(1.0)), st, start)
+    assert br.outcome is Outcome.ENDED_AT_HOPF, br.message
+    assert [s.type for s in br.special] == ["LPC", "HOPF"], br.special
+    lpc, hopf = br.special
+    assert lpc.located and abs(lpc.lam + a * a / 4) < 1e-9
+    assert abs(hopf.lam) < (1e-6 if hopf.located else hopf.lam_error), hopf
+    q = br.l2[:-1] ** 2
+    np.testing.assert_allclose(br.lam[:-1], q * q - a * q, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("a", [0.01, 0.03])
+def test_a_fold_next_to_the_pd_end_is_passed_before_the_family_ends(a):
+    """The doubled family of pd_family with gain lam - mu + a s - s^2 (s = |z|^2): doubled cycles on
+    lam = s^2 - a s, a fold at s = a/2, lam = -a^2/4, next to the end at the PD point lam = 0 (the same audit:
+    a spurious BPC, and the branch ran back over itself)."""
+    from gfbjax.cont import start_from_function
+
+    def field(x, lam, args):
+        osc, zdot = _drive(x)
+        s = x[2] ** 2 + x[3] ** 2
+        return jnp.concatenate([osc, zdot(lam - 0.5 + a * s - s * s)])
+
+    st = CycleSettings(m=4, N=24, ds=0.05, ds_max=0.2, max_points=80, lam_min=-0.5, lam_max=0.5, direction=-1)
+    br = continue_cycles(CycleProblem(field, 4, jnp.asarray(0.0)), st,
+                         start_from_function(_doubled_guess(0.6), 2.0, 0.36 - 0.6 * a, st))
+    assert br.outcome is Outcome.ENDED_AT_PD, br.message
+    assert [s.type for s in br.special] == ["LPC", "PD"], br.special
+    lpc, pd = br.special
+    assert lpc.located and abs(lpc.lam + a * a / 4) < 1e-9
+    assert abs(pd.lam) < (1e-6 if pd.located else pd.lam_error), pd
+    s = ((br.xmax - br.xmin)[:-1, 2] / 2) ** 2
+    np.testing.assert_allclose(br.lam[:-1], s * s - a * s, rtol=0, atol=1e-6)  # s read at the nodes (<= the max)
+
+
+@pytest.mark.parametrize("lb, ds_max", [(1e-3, 0.2), (1e-6, 0.2), (1e-4, 0.05)])
+def test_a_branch_point_next_to_the_pd_end_is_reported(lb, ds_max):
+    """pd_family (sat = 1) with a fifth state y' = (lam - lb) y - y^3: a pitchfork of the doubled cycles (a BPC) at
+    lam = lb, close to the family's end at the PD point lam = 0 (the same audit: the last step ran through both,
+    the BPC test changed sign twice, and only the end was reported)."""
+    from gfbjax.cont import start_from_function
+
+    def field(x, lam, args):
+        osc, zdot = _drive(x)
+        s = x[2] ** 2 + x[3] ** 2
+        return jnp.concatenate([osc, zdot(lam - 0.5 - s), jnp.stack([(lam - lb) * x[4] - x[4] ** 3])])
+
+    st = CycleSettings(m=4, N=24, ds=0.05, ds_max=ds_max, max_points=80, lam_min=-0.5, lam_max=0.5, direction=-1)
+    br = continue_cycles(CycleProblem(field, 5, jnp.asarray(0.0)), st,
+                         start_from_function(_doubled_guess(0.3, extra=1), 2.0, 0.3, st))
+    assert br.outcome is Outcome.ENDED_AT_PD, br.message
+    assert [s.type for s in br.special] == ["BPC", "PD"], br.special
+    bpc, pd = br.special
+    assert abs(bpc.lam - lb) < max(1e-9, bpc.lam_error), bpc
+    assert abs(pd.lam) < (1e-6 if pd.located else pd.lam_error), pd
+
+
+def test_a_distant_guess_that_converges_to_a_small_cycle_is_a_cycle():
+    """Stuart-Landau at lam = 1e-7 from a guess of radius 1: Newton converges to the genuine cycle of radius
+    sqrt(lam) = 3.2e-4, which a test against the guess alone (1e-3 of its amplitude) took for the equilibrium (the
+    same audit).  A collapse must be the constant orbit itself, to the corrector's tolerance."""
+    from gfbjax.cont import Scheme, correct_cycle, orbit_from_function, uniform_mesh
+    from gfbjax.cont import _collocation as col
+
+    scheme, lam = Scheme(4), 1e-7
+    guess = orbit_from_function(lambda t: np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1), 2 * np.pi,
+                                lam, scheme, uniform_mesh(24))
+    sol, lin = correct_cycle(CycleProblem(stuart_landau, 2, jnp.asarray(1.0)), guess,
+                             settings=CycleSettings(m=4, N=24, newton_max_iter=80))
+    assert sol.outcome is Outcome.CONVERGED and lin is not None, sol.outcome
+    np.testing.assert_allclose(float(col.l2_norm(sol.x, scheme)), np.sqrt(lam), rtol=1e-6)
