@@ -342,14 +342,31 @@ def half_period_defect(orbit: Orbit) -> float:
     return float(np.max(np.abs(half_period_odd(orbit))))
 
 
-def passed_through(a: Orbit, b: Orbit) -> bool:
-    """Whether the family went from ``a`` to ``b`` (two orbits on the same mesh, consecutive on a branch, phase
-    aligned by the phase condition) through an orbit that repeats itself after half its period: their
-    :func:`half_period_odd` parts point in opposite directions.  Such a step passed the point where the family was
-    born (a Hopf point, a period doubling) and ran on along its mirror image, the same cycles shifted by half a
-    period."""
+def passed_through(a: Orbit, b: Orbit, step_tol: float) -> str | None:
+    """Whether the family went from ``a`` to ``b`` (consecutive on a branch, phase aligned by the phase condition,
+    on the same mesh) through an orbit that repeats itself after half its period: their :func:`half_period_odd`
+    parts point in opposite directions (cosine below -1/2).  Such a step passed the point where the family was
+    born and ran on along its mirror image, the same cycles shifted by half a period.  Then the kind of that point
+    by what ``a`` is near: ``"equilibrium"`` (a Hopf point: the part even under the shift varies less than the
+    odd part, as for small cycles x_0 + eps w + O(eps^2)) or ``"half period"`` (a period doubling), else None.
+    No verdict (None) where either odd part is within :data:`COLLAPSE_TOLS` step tolerances of zero (a start at
+    the Hopf or PD point itself: its odd part is interpolation noise) or the meshes differ."""
+    if not np.array_equal(np.asarray(a.mesh), np.asarray(b.mesh)):
+        return None
     da, db = half_period_odd(a), half_period_odd(b)
-    return da.shape == db.shape and float(np.vdot(da, db)) < 0.0
+    floor = COLLAPSE_TOLS * step_tol * max(_size(a), _size(b))
+    if da.shape != db.shape or np.max(np.abs(da)) <= floor or np.max(np.abs(db)) <= floor:
+        return None
+    if float(np.vdot(da, db)) >= -0.5 * float(np.linalg.norm(da) * np.linalg.norm(db)):
+        return None
+    even = np.asarray(a.nodes()).reshape(da.shape) - 0.5 * da  # (x(t) + x(t + 1/2)) / 2
+    return "equilibrium" if np.max(np.ptp(even, axis=0)) < np.max(np.ptp(da, axis=0)) else "half period"
+
+
+def _size(orbit: Orbit) -> float:
+    """1 + max|x| over the nodes: the scale of the Newton step tolerance (a step is small when |dx| <= tol times
+    this)."""
+    return 1.0 + max(float(np.max(np.abs(np.asarray(orbit.xm)))), float(np.max(np.abs(np.asarray(orbit.xi)))))
 
 
 def shrunk(orbit: Orbit, reference: Orbit) -> str | None:
@@ -384,9 +401,8 @@ def collapsed(orbit: Orbit, guess: Orbit, step_tol: float) -> str | None:
     onto = shrunk(orbit, guess)
     if onto is None:
         return None
-    size = 1.0 + max(float(np.max(np.abs(np.asarray(orbit.xm)))), float(np.max(np.abs(np.asarray(orbit.xi)))))
     left = float(amplitude(orbit)) if onto == "equilibrium" else half_period_defect(orbit)
-    return onto if left <= COLLAPSE_TOLS * step_tol * size else None
+    return onto if left <= COLLAPSE_TOLS * step_tol * _size(orbit) else None
 
 
 # --------------------------------------------------------------------------

@@ -291,8 +291,9 @@ def correct_cycle(problem: CycleProblem, orbit: col.Orbit, con: col.Constraint |
     ``CycleSettings()``): at fixed lam = ``orbit.lam`` with phase reference ``orbit`` unless ``con`` is given.
     Returns the :class:`NewtonSolution` (``x`` the orbit, ``aux`` the unit tangent) and the linearisation at
     the converged orbit (None when not converged), for :func:`analyse` and the implicit derivatives.  A
-    correction that converged to an equilibrium (the constant orbit, :func:`._collocation.collapsed`) found no
-    cycle: its outcome is ``NO_SOLUTION``.
+    correction that converged to an equilibrium (the constant orbit) or to a cycle of half the period traversed
+    twice, from a guess that was neither (:func:`._collocation.collapsed`), found no cycle: its outcome is
+    ``NO_SOLUTION``.
     Raises ``ValueError`` before any work when the inputs do not fit together (:func:`check_cycle_inputs`) or the
     orbit is not finite (mesh, T, lam, states) or f is NaN or inf at any of its nodes (the message names the
     node's scaled time and components)."""
@@ -475,11 +476,22 @@ class CycleCurve(Curve):
         return None if onto is None else self._end_data(X, onto)
 
     def collapsed(self, X, guess):
+        # the period of the last genuine cycle: a constant orbit has any period (the arclength row sets it)
         onto = col.collapsed(X, guess, self.settings.newton_step_tol)
-        return None if onto is None else self._end_data(X, onto)
+        return None if onto is None else self._end_data(guess, onto)
 
     def passed_end(self, X, Xn):
-        return col.passed_through(X, Xn)
+        onto = col.passed_through(X, Xn, self.settings.newton_step_tol)
+        if onto is None:
+            return None
+        # where the end lies: lam is even in the signed size a of the odd part next to the end, lam = L + c a^2
+        # (the same cycles on both sides), so the two points give L; equal sizes on both sides leave it open
+        a2, b2 = col.half_period_defect(X) ** 2, col.half_period_defect(Xn) ** 2
+        lx, ly = float(X.lam), float(Xn.lam)
+        if abs(a2 - b2) <= 1e-3 * max(a2, b2):
+            return {**self._end_data(X, onto), "lam": 0.5 * (lx + ly), "lam_error": math.nan}
+        L = (ly * a2 - lx * b2) / (a2 - b2)
+        return {**self._end_data(X, onto), "lam": L, "lam_error": max(abs(L - lx), abs(L - ly))}
 
     @staticmethod
     def _end_data(X, onto):

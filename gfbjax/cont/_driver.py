@@ -146,11 +146,12 @@ class Curve(abc.ABC):
         (the default)."""
         return None
 
-    def passed_end(self, X: Any, Xn: Any) -> bool:
+    def passed_end(self, X: Any, Xn: Any) -> dict[str, Any] | None:
         """Whether the step from X to Xn ran through the point where the family was born and on along its mirror
         image (cycles: through zero amplitude at a Hopf point, or through the cycle of half the period at a period
-        doubling: :func:`._collocation.passed_through`); False by default."""
-        return False
+        doubling: :func:`._collocation.passed_through`); then, as :meth:`family_ends`, the end's fields, else None
+        (the default)."""
+        return None
 
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
         """A^{-1} b (flat) for a fixed vector b, A the augmented Jacobian at X of the linearisation ``lin``; None
@@ -364,20 +365,17 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             # the cycle of half the period) and the correction landed on what it was born from (which solves the
             # cycles' equations too, with no fold to signal it): shorter steps approach the end until the halvings
             # are spent, then the branch ends there
-            if refined < s.event_refine and 0.5 * ds >= s.ds_min:
-                if refined == 0:
-                    ds_unrefined = ds
-                ds, refined = 0.5 * ds, refined + 1
+            if _can_refine(s, ds, refined):
+                ds, refined, ds_unrefined = _refine(ds, refined, ds_unrefined)
                 continue
             return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds, onto)
-        if c.passed_end(X, Xn) and refined < s.event_refine and 0.5 * ds >= s.ds_min:
+        passed = c.passed_end(X, Xn)
+        if passed is not None and _can_refine(s, ds, refined):
             # the step ran through the family's end onto its mirror image (the same cycles): an event between X and
             # the end has its image beyond it, and the two cancel in the test functions (a fold next to the end is
             # crossed twice, and its multiplier through +1 is then read as a BPC); shorter steps approach the end
             # until the halvings are spent, and the last one locates it (a fold, or a BPC, at zero amplitude)
-            if refined == 0:
-                ds_unrefined = ds
-            ds, refined = 0.5 * ds, refined + 1
+            ds, refined, ds_unrefined = _refine(ds, refined, ds_unrefined)
             continue
         if _angle(c, tau, tau_n) > s.max_angle and 0.5 * ds >= s.ds_min:
             ds *= 0.5  # the tangent turned too far: a jump to another branch, or a bend the step does not resolve
@@ -432,22 +430,24 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
                        for d in [c.family_ends(f.point, X, Xn)] if d is not None), None)
         if ending is not None:
             return _end_of_family(run, *ending, found, X, ds)
+        if passed is not None:
+            # through the end in the shortest step, but no fold or branch point located there (not detected, not
+            # sought at the first step, or cancelled again): the end lies on the path between X and Xn
+            return _end_passed(run, X, Xn, an_n, tau_n, int(sol.iterations), ds, passed, found)
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come
         start_reported = len(run.points) <= 1 or any(p.index == len(run.points) - 1 and p.lam == c.lam(X)
                                                      for p in run.special)
         missing = _unexplained(c, tests, tests_n, s.detect, found, start_reported)
-        if ((unlocated and s.locate and direction is not None or missing)
-                and bound is None and refined < s.event_refine and 0.5 * ds >= s.ds_min):
+        if (unlocated and s.locate and direction is not None or missing) and bound is None \
+                and _can_refine(s, ds, refined):
             # an event that cannot be located: the step may have jumped to another branch (the test functions
             # then change sign without passing through zero), or the test function is not resolved; a shorter
             # step tells the two apart.  More crossings than sign changes: two events in one step cancelled in
             # one test function (two pairs leaving the circle, or one leaving while another enters, seen by
             # matching); a shorter step separates them
-            if refined == 0:
-                ds_unrefined = ds
-            ds, refined = 0.5 * ds, refined + 1
+            ds, refined, ds_unrefined = _refine(ds, refined, ds_unrefined)
             continue
         if missing and s.detect:  # refined as far as allowed: report, unlocated, what crossed
             found += [f for f in _unresolved(run, missing, X, Xn, an_n, tests.get("CRITICAL"), ds)
@@ -474,6 +474,16 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             return Outcome.REACHED_END, f"lam = {bound:.6g} reached (bounds [lam_min, lam_max] = [{s.lam_min:g}, " \
                                         f"{s.lam_max:g}])"
     return Outcome.MAX_POINTS, f"max_points = {s.max_points} reached"
+
+
+def _can_refine(s: Any, ds: float, refined: int) -> bool:
+    """Whether a step may still be halved for an event (``event_refine`` halvings, not below ``ds_min``)."""
+    return refined < s.event_refine and 0.5 * ds >= s.ds_min
+
+
+def _refine(ds: float, refined: int, ds_unrefined: float) -> tuple[float, int, float]:
+    """The step halved for an event: (ds, refined, ds_unrefined), the last the step before the first halving."""
+    return 0.5 * ds, refined + 1, (ds if refined == 0 else ds_unrefined)
 
 
 def _unexplained(c: Curve, tests: dict | None, tests_n: dict, detect: tuple = (), found: list = (),
@@ -695,21 +705,14 @@ def _end_of_family(run: _Run, f: Found, data: dict[str, Any], found: list[Found]
     """End the branch at the point ``f`` where its cycles shrank onto what they were born from (``data["type"]``:
     a Hopf point, or a period doubling of the cycles of half the period): a fold test changes sign there only
     because the discrete family runs on through it, back along itself (the same cycles: the amplitude's or the
-    half-period shift's sign flips).  The events before it in the step are inserted, except branch points of
-    cycles within its bracket (at a period doubling the doubled cycle's multiplier -1 squares to +1: the BPC test
-    vanishes at the end itself); the end is the last row (located or bracketed as the fold was), and the rest is
-    not recorded."""
+    half-period shift's sign flips).  The events before it in the step are inserted, the end is the last row
+    (located or bracketed as the fold was), and the rest is not recorded."""
     c = run.curve
     data = dict(data)
     kind = data.pop("type")
     outcome, shrank, point, continuing = _ENDS[kind]
-    lam = float(c.lam(f.point))
-    reach = f.lam_error if np.isfinite(f.lam_error) else 0.0
+    lam = float(c.lam(f.point)) if f.lam is None else f.lam
     for g in sorted((g for g in found if g is not f and np.isfinite(g.s) and g.s < f.s), key=lambda g: g.s):
-        g_lam = g.lam if g.lam is not None else float(c.lam(g.point))
-        g_reach = g.lam_error if np.isfinite(g.lam_error) else 0.0
-        if kind == "PD" and g.kind == "BPC" and abs(g_lam - lam) <= max(reach, g_reach, 1e-8 * max(1.0, abs(lam))):
-            continue
         _insert(run, g)
     rec = c.record(f.point, f.analysis, f.iterations, f.s, f.tangent_lam)
     run.special_states.append(c.state(f.point))
@@ -741,6 +744,24 @@ def _end_collapsed(run: _Run, X: Any, Xn: Any, lin: Any, tau_n: Any, iterations:
                f"step of ds = {ds:.3g}): the family ends at {point} in that interval ({continuing} continue "
                "there)")
     return _end_of_family(run, f, data, [], X, ds, message)
+
+
+def _end_passed(run: _Run, X: Any, Xn: Any, an_n: dict, tau_n: Any, iterations: int, ds: float,
+                data: dict[str, Any], found: list[Found]) -> tuple[Outcome, str]:
+    """End the branch whose shortest step from X ran through the family's end onto its mirror image at Xn
+    (:meth:`Curve.passed_end`) without locating it: the row is Xn, the end not located; its ``lam`` and
+    ``lam_error`` are the curve's estimate (``data``: lam turns at the end, so the end can lie outside the step's
+    span in lam)."""
+    c = run.curve
+    data = dict(data)
+    lam, lam_error = data.pop("lam"), data.pop("lam_error")
+    f = Found(data["type"], Xn, an_n, False, math.nan, {}, iterations=iterations, s=ds,
+              tangent_lam=run.tangent_lam(tau_n), tangent=tau_n, lam_error=lam_error, lam=lam)
+    _, shrank, point, continuing = _ENDS[data["type"]]
+    message = (f"the cycles {shrank} near lam = {lam:.6g} +- {lam_error:.2g}, passed in the step from lam = "
+               f"{float(c.lam(X)):.6g} to {float(c.lam(Xn)):.6g} onto the same cycles shifted by half a period: the "
+               f"family ends at {point} there ({continuing} continue there)")
+    return _end_of_family(run, f, data, found, X, ds, message)
 
 
 def _own_member(run: _Run, f: Found) -> None:
