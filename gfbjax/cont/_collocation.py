@@ -354,7 +354,7 @@ def passed_through(a: Orbit, b: Orbit, step_tol: float) -> str | None:
     if not np.array_equal(np.asarray(a.mesh), np.asarray(b.mesh)):
         return None
     da, db = half_period_odd(a), half_period_odd(b)
-    floor = COLLAPSE_TOLS * step_tol * max(_size(a), _size(b))
+    floor = COLLAPSE_TOLS * step_tol * max(state_scale(a), state_scale(b))
     if da.shape != db.shape or np.max(np.abs(da)) <= floor or np.max(np.abs(db)) <= floor:
         return None
     if float(np.vdot(da, db)) >= -0.5 * float(np.linalg.norm(da) * np.linalg.norm(db)):
@@ -363,7 +363,7 @@ def passed_through(a: Orbit, b: Orbit, step_tol: float) -> str | None:
     return "equilibrium" if np.max(np.ptp(even, axis=0)) < np.max(np.ptp(da, axis=0)) else "half period"
 
 
-def _size(orbit: Orbit) -> float:
+def state_scale(orbit: Orbit) -> float:
     """1 + max|x| over the nodes: the scale of the Newton step tolerance (a step is small when |dx| <= tol times
     this)."""
     return 1.0 + max(float(np.max(np.abs(np.asarray(orbit.xm)))), float(np.max(np.abs(np.asarray(orbit.xi)))))
@@ -402,7 +402,7 @@ def collapsed(orbit: Orbit, guess: Orbit, step_tol: float) -> str | None:
     if onto is None:
         return None
     left = float(amplitude(orbit)) if onto == "equilibrium" else half_period_defect(orbit)
-    return onto if left <= COLLAPSE_TOLS * step_tol * _size(orbit) else None
+    return onto if left <= COLLAPSE_TOLS * step_tol * state_scale(orbit) else None
 
 
 # --------------------------------------------------------------------------

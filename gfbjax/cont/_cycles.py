@@ -275,11 +275,21 @@ def _check_orbit(problem: CycleProblem, orbit: col.Orbit, scheme: col.Scheme, wh
                          np.concatenate([mesh, inner, t_points]), mesh, float(orbit.lam), problem.args, what)
 
 
+def _end_lam(A: col.Orbit, B: col.Orbit) -> float | None:
+    """Where a family ends (a Hopf point, a period doubling) from two of its cycles A and B near the end: lam is
+    even in the signed size a of the odd part x(t) - x(t + 1/2) there, lam = L + c a^2 + O(a^4), so the two give
+    L.  None when the two sizes are too close to separate L from c (within 0.1 % in a^2)."""
+    a2, b2 = col.half_period_defect(A) ** 2, col.half_period_defect(B) ** 2
+    if not abs(a2 - b2) > 1e-3 * max(a2, b2):
+        return None
+    return (float(B.lam) * a2 - float(A.lam) * b2) / (a2 - b2)
+
+
 def _check_moves(orbit: col.Orbit, what: str) -> None:
     """ValueError when ``orbit``, a guess to correct, is constant: a constant orbit is an equilibrium with any
     period, and as its own phase reference it makes the phase condition (the integral of x . x_ref') vanish;
     Newton's matrix is singular and the correction would end "nonfinite" or "diverged" without saying why."""
-    if col.amplitude(orbit) <= 1e-14 * (1.0 + max(float(np.max(np.abs(orbit.xm))), float(np.max(np.abs(orbit.xi))))):
+    if col.amplitude(orbit) <= 1e-14 * col.state_scale(orbit):
         raise ValueError(f"{what} is constant (every node equals xm[0]): a cycle needs a guess that moves; start "
                          "from a Hopf point (start_from_hopf), a period-doubling point (start_from_pd), a branch "
                          "(start_from_branch) or samples of a time integration (start_from_samples)")
@@ -475,22 +485,28 @@ class CycleCurve(Curve):
         onto = next((k for k in (col.shrunk(X, end) for end in (left, right)) if k is not None), None)
         return None if onto is None else self._end_data(X, onto)
 
-    def collapsed(self, X, guess):
+    def collapsed(self, X, guess, before=None):
         # the period of the last genuine cycle: a constant orbit has any period (the arclength row sets it)
         onto = col.collapsed(X, guess, self.settings.newton_step_tol)
-        return None if onto is None else self._end_data(guess, onto)
+        if onto is None:
+            return None
+        lx, ly = float(guess.lam), float(X.lam)
+        # the end lies on the path from the last cycle (guess) to X, but lam need not be monotone along it (lam
+        # turns at the end, and X lies on what the family was born from): the fit through the last two cycles
+        # places it, and the interval about it covers the step's span as well
+        L = None if before is None else _end_lam(before, guess)
+        if L is None:
+            return {**self._end_data(guess, onto), "lam": ly, "lam_error": abs(ly - lx)}
+        return {**self._end_data(guess, onto), "lam": L, "lam_error": max(abs(L - lx), abs(L - ly))}
 
     def passed_end(self, X, Xn):
         onto = col.passed_through(X, Xn, self.settings.newton_step_tol)
         if onto is None:
             return None
-        # where the end lies: lam is even in the signed size a of the odd part next to the end, lam = L + c a^2
-        # (the same cycles on both sides), so the two points give L; equal sizes on both sides leave it open
-        a2, b2 = col.half_period_defect(X) ** 2, col.half_period_defect(Xn) ** 2
         lx, ly = float(X.lam), float(Xn.lam)
-        if abs(a2 - b2) <= 1e-3 * max(a2, b2):
+        L = _end_lam(X, Xn)  # the same cycles on both sides of the end
+        if L is None:
             return {**self._end_data(X, onto), "lam": 0.5 * (lx + ly), "lam_error": math.nan}
-        L = (ly * a2 - lx * b2) / (a2 - b2)
         return {**self._end_data(X, onto), "lam": L, "lam_error": max(abs(L - lx), abs(L - ly))}
 
     @staticmethod

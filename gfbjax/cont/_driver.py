@@ -139,18 +139,19 @@ class Curve(abc.ABC):
         folds are folds)."""
         return None
 
-    def collapsed(self, X: Any, guess: Any) -> dict[str, Any] | None:
+    def collapsed(self, X: Any, guess: Any, before: Any = None) -> dict[str, Any] | None:
         """Whether X, a converged correction of ``guess``, is no member of the curve but a degenerate solution of
         its equations (cycles: the constant orbit, which solves them with any period, or a cycle of half the
-        period traversed twice); then, as :meth:`family_ends`, the fields of the family's end there, else None
-        (the default)."""
+        period traversed twice); then, as :meth:`family_ends`, the fields of the family's end there, with its
+        estimated ``lam`` and ``lam_error`` (``before``: the member before ``guess``, where known), else None (the
+        default)."""
         return None
 
     def passed_end(self, X: Any, Xn: Any) -> dict[str, Any] | None:
         """Whether the step from X to Xn ran through the point where the family was born and on along its mirror
         image (cycles: through zero amplitude at a Hopf point, or through the cycle of half the period at a period
-        doubling: :func:`._collocation.passed_through`); then, as :meth:`family_ends`, the end's fields, else None
-        (the default)."""
+        doubling: :func:`._collocation.passed_through`); then, as :meth:`collapsed`, the end's fields with its
+        estimated ``lam`` and ``lam_error``, else None (the default)."""
         return None
 
     def border_solve(self, X: Any, lin: Any) -> np.ndarray | None:
@@ -359,7 +360,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         Xn, tau_n = sol.x, sol.aux
         if direction is None:  # natural parameter: orient the corrector's tangent by the stepping direction
             tau_n = c.scale(tau_n, float(s.direction))
-        onto = c.collapsed(Xn, X)
+        onto = c.collapsed(Xn, X, X_prev)
         if onto is not None:
             # the step passed the point where the family is born (a Hopf point: zero amplitude; a period doubling:
             # the cycle of half the period) and the correction landed on what it was born from (which solves the
@@ -368,7 +369,10 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             if _can_refine(s, ds, refined):
                 ds, refined, ds_unrefined = _refine(ds, refined, ds_unrefined)
                 continue
-            return _end_collapsed(run, X, Xn, lin, tau_n, int(sol.iterations), ds, onto)
+            how = (f"no cycle in the step of ds = {ds:.3g} from lam = {c.lam(X):.6g}, the last cycle, to "
+                   f"{c.lam(Xn):.6g}")
+            return _end_unlocated(run, X, Xn, c.analyse(Xn, lin, tau_n), tau_n, int(sol.iterations), ds, onto, [],
+                                  how)
         passed = c.passed_end(X, Xn)
         if passed is not None and _can_refine(s, ds, refined):
             # the step ran through the family's end onto its mirror image (the same cycles): an event between X and
@@ -433,7 +437,9 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         if passed is not None:
             # through the end in the shortest step, but no fold or branch point located there (not detected, not
             # sought at the first step, or cancelled again): the end lies on the path between X and Xn
-            return _end_passed(run, X, Xn, an_n, tau_n, int(sol.iterations), ds, passed, found)
+            how = (f"passed in the step from lam = {c.lam(X):.6g} to {c.lam(Xn):.6g} onto the same cycles "
+                   "shifted by half a period")
+            return _end_unlocated(run, X, Xn, an_n, tau_n, int(sol.iterations), ds, passed, found, how)
         unlocated = any(not f.located and not (f.singular and f.kind in SINGULAR_EVENTS) for f in found)
         # the branch's first point stands for itself: a member on the boundary there (a start at a fold) is where
         # the branch begins, not a crossing still to come
@@ -728,39 +734,20 @@ def _end_of_family(run: _Run, f: Found, data: dict[str, Any], found: list[Found]
     return outcome, message
 
 
-def _end_collapsed(run: _Run, X: Any, Xn: Any, lin: Any, tau_n: Any, iterations: int, ds: float,
-                   data: dict[str, Any]) -> tuple[Outcome, str]:
-    """End the branch where its step from X collapsed onto Xn (:meth:`Curve.collapsed`: the equilibrium, or the
-    cycle of half the period) at the shortest step allowed: the family ends between X and Xn at the point where
-    it was born, reported at Xn as bracketed, not located, with the bracket's span in lam as its error."""
-    c = run.curve
-    an = c.analyse(Xn, lin, tau_n)
-    tangent_lam = run.tangent_lam(tau_n)
-    lam, lam_before = float(c.lam(Xn)), float(c.lam(X))
-    f = Found(data["type"], Xn, an, False, math.nan, {}, iterations=iterations, s=ds, tangent_lam=tangent_lam,
-              tangent=tau_n, lam_error=abs(lam - lam_before))
-    _, shrank, point, continuing = _ENDS[data["type"]]
-    message = (f"the cycles {shrank} between lam = {lam_before:.6g} (the last cycle) and {lam:.6g} (no cycle in a "
-               f"step of ds = {ds:.3g}): the family ends at {point} in that interval ({continuing} continue "
-               "there)")
-    return _end_of_family(run, f, data, [], X, ds, message)
-
-
-def _end_passed(run: _Run, X: Any, Xn: Any, an_n: dict, tau_n: Any, iterations: int, ds: float,
-                data: dict[str, Any], found: list[Found]) -> tuple[Outcome, str]:
-    """End the branch whose shortest step from X ran through the family's end onto its mirror image at Xn
-    (:meth:`Curve.passed_end`) without locating it: the row is Xn, the end not located; its ``lam`` and
-    ``lam_error`` are the curve's estimate (``data``: lam turns at the end, so the end can lie outside the step's
-    span in lam)."""
-    c = run.curve
+def _end_unlocated(run: _Run, X: Any, Xn: Any, an: dict, tau_n: Any, iterations: int, ds: float,
+                   data: dict[str, Any], found: list[Found], how: str) -> tuple[Outcome, str]:
+    """End the branch whose shortest step from X to Xn went past the point where the family was born without
+    locating it: the correction collapsed onto what the family was born from (:meth:`Curve.collapsed`), or ran
+    through the end onto its mirror image (:meth:`Curve.passed_end`).  The row is Xn (analysis ``an``), the end
+    not located; its ``lam`` and ``lam_error`` are the curve's estimate in ``data`` (lam turns at the end, so the
+    end can lie outside the step's span in lam).  ``how``: the step, in words, for the message."""
     data = dict(data)
     lam, lam_error = data.pop("lam"), data.pop("lam_error")
-    f = Found(data["type"], Xn, an_n, False, math.nan, {}, iterations=iterations, s=ds,
+    f = Found(data["type"], Xn, an, False, math.nan, {}, iterations=iterations, s=ds,
               tangent_lam=run.tangent_lam(tau_n), tangent=tau_n, lam_error=lam_error, lam=lam)
     _, shrank, point, continuing = _ENDS[data["type"]]
-    message = (f"the cycles {shrank} near lam = {lam:.6g} +- {lam_error:.2g}, passed in the step from lam = "
-               f"{float(c.lam(X)):.6g} to {float(c.lam(Xn)):.6g} onto the same cycles shifted by half a period: the "
-               f"family ends at {point} there ({continuing} continue there)")
+    message = (f"the cycles {shrank} near lam = {lam:.6g} +- {lam_error:.2g} ({how}): the family ends at {point} "
+               f"there ({continuing} continue there)")
     return _end_of_family(run, f, data, found, X, ds, message)
 
 

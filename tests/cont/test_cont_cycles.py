@@ -346,11 +346,13 @@ def _resumes_to_the_same_end(prob, st, start, tmp_path, outcome):
 
 def _at_zero(end):
     """A family's end at lam = 0 (the analytic value): located there, or bracketed by an error bar that covers 0
-    and is small (1e-3: a few of the last, halved steps)."""
+    and is small (1e-3: a few of the last, halved steps), with its estimate well inside the bar (lam = L + c a^2
+    through the last two cycles, or the two sides of the end, is exact to O(a^4): the bar is the step's span)."""
     if end.located:
         assert abs(end.lam) < 1e-6, end
     else:
         assert abs(end.lam) <= end.lam_error < 1e-3, end
+        assert abs(end.lam) <= max(0.05 * end.lam_error, 1e-9), end
 
 
 def _scaled_sub(scale):
