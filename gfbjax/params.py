@@ -41,6 +41,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import sys
 import tomllib
 import warnings
 from dataclasses import dataclass
@@ -273,7 +275,7 @@ class SystemSpec:
         if e_u > float(self.c):  # the disc's mass eccentricity is not bounded by the bearing clearance
             warnings.warn(f"unbalance eccentricity e_u = {e_u * 1e6:.4g} um exceeds the radial clearance "
                           f"c = {float(self.c) * 1e6:.4g} um (allowed: it is the disc's mass eccentricity, but the "
-                          "journals may then touch the foil)", UserWarning, stacklevel=4)
+                          "journals may then touch the foil)", UserWarning, stacklevel=_outside_stacklevel())
         limits.THETA0.check(self.theta0)
         limits.LOAD.check(self.load)
         limits.check_grid(self.Nx, self.Nz, _n_rotor(self.rotor), self.axial_domain == "full")
@@ -324,14 +326,14 @@ class SystemSpec:
         return m * self.g
 
     def omega_bar(self, rpm: float) -> float:
-        """Dimensionless speed ``Omega_bar = Omega t*`` of a shaft speed in rev/min (a finite number; NaN or
-        infinity raise :class:`ParameterError`).  Arrays are converted element by element."""
-        _check_finite("rpm", rpm)
+        """Dimensionless speed ``Omega_bar = Omega t*`` of a shaft speed in rev/min (finite and >= 0; NaN,
+        infinity or a negative speed raise :class:`ParameterError`).  Arrays are converted element by element."""
+        _check_speed("rpm", rpm)
         return rpm * 2 * math.pi / 60 * self.t_star
 
     def rpm(self, omega_bar: float) -> float:
-        """Shaft speed in rev/min of a dimensionless speed (a finite number; NaN or infinity raise)."""
-        _check_finite("omega_bar", omega_bar)
+        """Shaft speed in rev/min of a dimensionless speed (finite and >= 0; otherwise ParameterError)."""
+        _check_speed("omega_bar", omega_bar)
         return omega_bar / self.t_star * 60 / (2 * math.pi)
 
     def replace(self, **changes: Any) -> "SystemSpec":
@@ -381,6 +383,25 @@ def _n_rotor(rotor: str) -> int:
     from .model.rotor import N_ROTOR
 
     return N_ROTOR[rotor]
+
+
+def _outside_stacklevel() -> int:
+    """The ``stacklevel`` for a warning raised in the caller of this function that names the first frame outside
+    gfbjax (and outside the dataclass machinery that calls ``__post_init__``): the user's line."""
+    package = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and (frame.f_code.co_filename.startswith(package)
+                                 or frame.f_code.co_filename in ("<string>", dataclasses.__file__)):
+        frame, level = frame.f_back, level + 1
+    return level
+
+
+def _check_speed(name: str, value: Any) -> None:
+    """ParameterError unless every element of ``value`` is a finite speed >= 0 (tracers pass)."""
+    _check_finite(name, value)
+    if not limits.is_traced(value) and np.any(np.asarray(value, dtype=float) < 0.0):
+        raise ParameterError(f"{name} must be >= 0 (a shaft speed; the direction of rotation is fixed by the "
+                             f"model), got {value!r}")
 
 
 def _check_finite(name: str, value: Any) -> None:
@@ -562,7 +583,8 @@ def load_config(path: str | Path) -> SystemSpec:
                              "e.g. base = \"reference\"")
     unknown = set(data) - _FIELDS
     if unknown:
-        raise ParameterError(f"unknown key(s) {sorted(unknown)} in {str(path)!r}; allowed: {sorted(_FIELDS)}")
+        raise ParameterError(f"unknown key(s) {sorted(unknown)} in {str(path)!r}; allowed: {sorted(_FIELDS)}, and "
+                             "base (a built-in system) and preset (\"corrected\" or \"paper\")")
     return variation(base, preset=preset, **data)
 
 

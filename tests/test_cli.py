@@ -88,6 +88,17 @@ def test_static_prints_summary(tmp_path, capsys):
     assert not list(tmp_path.glob("*.png"))
 
 
+def test_static_without_an_equilibrium_gives_no_stability_verdict(tmp_path, capsys):
+    """A new user's audit: at Omega_bar = 1e-6 the film carries no load (no_solution, exit 1), yet the summary
+    printed the last iterate's critical eigenvalue with "UNSTABLE" and wrote "stable": false; a state that is no
+    equilibrium has no stability."""
+    code, out, err = _run(["static", "--speed", "1e-6", *SMALL, "--no-figures", "--out", str(tmp_path)], capsys)
+    data = json.loads((tmp_path / "static.json").read_text())
+    assert code == 1 and data["equilibrium"]["outcome"] != "converged", (code, data["equilibrium"]["outcome"])
+    assert data["equilibrium"]["stable"] is None
+    assert "no stability verdict" in out and "UNSTABLE" not in out and "STABLE" not in out
+
+
 def test_static_curves_small(tmp_path, capsys):
     code, out, err = _run(["static", "--speed", "0.3", *SMALL, "--curves", "--alphas", "0.1,1", "--speeds",
                            "0.3,0.6", "--loads", "0,0.2", "--quiet", "--out", str(tmp_path)], capsys)

@@ -307,7 +307,8 @@ def continue_gfb_cycles(params: Params, omega_start: float, omega_end: float,
     monitor = film_monitor(h_rub, on_contact)
     if float(params.eps) <= 0.0:
         raise ParameterError("eps = 0 (balanced rotor): there is no forced cycle; use continue_gfb_equilibria "
-                             "and start cycles from its Hopf point")
+                             "and start cycles from its Hopf point (continue_gfb_hopf_cycles; on the command line: "
+                             "gfbjax equilibria --hopf-cycles)")
     settings = _within_range(_check_settings(settings or default_cycle_settings(), cont.CycleSettings), omega_start,
                              omega_end)
     meta = branch_meta(params, "unbalance_response", spec)  # before the work: a spec of another system fails fast

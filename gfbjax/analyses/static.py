@@ -146,8 +146,11 @@ class StaticResult:
         return complex(self.eigenvalues[0]) if self.eigenvalues.size else complex("nan")
 
     @property
-    def stable(self) -> bool:
-        """Linearly stable: every eigenvalue of the Jacobian has a negative real part."""
+    def stable(self) -> bool | None:
+        """Linearly stable: every eigenvalue of the Jacobian has a negative real part.  None when the solve did
+        not converge (the state is no equilibrium, and its eigenvalues say nothing about stability)."""
+        if not self.converged:
+            return None
         return bool(self.eigenvalues.size) and float(self.eigenvalues[0].real) < 0.0
 
     def midplane_pressure(self) -> np.ndarray:

@@ -25,7 +25,7 @@ from ._checks import (check_field_at_nodes, check_finite, check_index, check_loc
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (classify, crossed_multipliers, cycle_test_functions, detect, double_orbit_pd, EVENT_WEIGHTS,
-                      multiplier_crossings, name_crossings)
+                      multiplier_crossings, name_crossings, untracked_multipliers)
 from ._floquet import FloquetMethod, nontrivial, trivial_error
 from ._mesh import equidistributed_mesh, error_estimate, halved_mesh, interval_errors, remesh
 from ._linear import BoundSolver, Linearisation, SparseSweep, choose_solver
@@ -445,6 +445,9 @@ class CycleCurve(Curve):
     def crossings(self, before, after):
         """Multipliers that crossed the unit circle between two points, by matching."""
         return multiplier_crossings(before, after)
+
+    def untracked(self, before, after):
+        return untracked_multipliers(before, after)
 
     def crossing_kinds(self, an, count, before=None):
         """``count`` crossings named from the non-trivial multipliers that crossed the unit circle since

@@ -172,6 +172,12 @@ class Curve(abc.ABC):
         default."""
         return 0
 
+    def untracked(self, before: np.ndarray, after: np.ndarray) -> bool:
+        """Whether the step between two points whose test data hold ``CRITICAL`` = ``before`` and ``after`` moved
+        the spectrum too far to tell by matching whether one member left the stable side while another entered
+        (:func:`._events.untracked`); False by default."""
+        return False
+
     def crossing_kinds(self, analysis: dict[str, Any], count: int,
                        before: np.ndarray | None = None) -> list[tuple[str, dict[str, Any]]]:
         """(name, data) for ``count`` crossings of the stability boundary that no test function's sign change
@@ -346,6 +352,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         refined, ds_unrefined = int(restored.driver["refined"]), float(restored.driver["ds_unrefined"])
         ends = [int(restored.driver[k]) for k in ("end0", "end1") if restored.driver.get(k, -1) >= 0]
     plotted = _PlottedRange()
+    spectrum_halvings = 0  # of the step being tried, for a spectrum that moved too far (_untracked)
     while len(run.points) < s.max_points:
         # until the chord test has its three points it knows no curvature: the first steps are capped instead
         pred, con, ds, direction = algo.predict(c, X, X_prev, tau, ds, s.direction,
@@ -412,6 +419,12 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             # the events of this step are not sought: the ones before the crossing are lost (rare; the steps
             # are short where a cycle grows into contact)
             return _monitor_end(run, X, direction, ds, tests, tests_n, Xn, an_n)
+        if _untracked(c, tests, tests_n) and spectrum_halvings < s.event_refine and 0.5 * ds >= s.ds_min:
+            # the spectrum moved too far in the step to be matched across the boundary: one member may have left the
+            # stable side while another entered, which no count or sign shows; a shorter step matches it (as the
+            # angle test, a control of the step, with its own count: at most event_refine halvings per step)
+            ds, spectrum_halvings = 0.5 * ds, spectrum_halvings + 1
+            continue
         found = []
         if tests is not None and s.detect:
             found = [f for f in (localise(run, kind, X, direction, ds, tests, tests_n, Xn, an_n)
@@ -446,8 +459,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
         start_reported = len(run.points) <= 1 or any(p.index == len(run.points) - 1 and p.lam == c.lam(X)
                                                      for p in run.special)
         missing = _unexplained(c, tests, tests_n, s.detect, found, start_reported)
-        if (unlocated and s.locate and direction is not None or missing) and bound is None \
-                and _can_refine(s, ds, refined):
+        if (unlocated and s.locate and direction is not None or missing) and _can_refine(s, ds, refined):
             # an event that cannot be located: the step may have jumped to another branch (the test functions
             # then change sign without passing through zero), or the test function is not resolved; a shorter
             # step tells the two apart.  More crossings than sign changes: two events in one step cancelled in
@@ -466,6 +478,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             # steps would creep towards an event the corrector cannot reach (a branch point) until ds < ds_min
             refined = 0
         rec = c.record(Xn, an_n, int(sol.iterations), ds, run.tangent_lam(tau_n))
+        spectrum_halvings = 0
         X_prev, X, tau, tests = X, Xn, tau_n, tests_n
         X, tau, X_prev, tests = c.adapt(X, tau, X_prev, tests, len(run.points) + 1)
         ds = min(ds * s.grow, s.ds_max) if int(sol.iterations) <= s.fast_iter else ds
@@ -511,6 +524,12 @@ def _unexplained(c: Curve, tests: dict | None, tests_n: dict, detect: tuple = ()
                if "CRITICAL" in tests and "CRITICAL" in tests_n else 0)
     return max(0, max(_crossings(tests, tests_n, start_reported), matched) - explained,
                _odd_one_out(tests, tests_n, kinds, explained))
+
+
+def _untracked(c: Curve, tests: dict | None, tests_n: dict) -> bool:
+    """:meth:`Curve.untracked` between the step's two points (False without their ``CRITICAL`` members)."""
+    return tests is not None and "CRITICAL" in tests and "CRITICAL" in tests_n and \
+        c.untracked(tests["CRITICAL"], tests_n["CRITICAL"])
 
 
 #: events whose member need not cross the boundary: along a side branch that turns at a branch point the critical
@@ -748,6 +767,11 @@ def _end_unlocated(run: _Run, X: Any, Xn: Any, an: dict, tau_n: Any, iterations:
     _, shrank, point, continuing = _ENDS[data["type"]]
     message = (f"the cycles {shrank} near lam = {lam:.6g} +- {lam_error:.2g} ({how}): the family ends at {point} "
                f"there ({continuing} continue there)")
+    # a fold or branch point bracketed within the end's error bar is the end's own sign change (lam turns there,
+    # and a multiplier is 1 there): one next to the end would have had a step of its own before the halvings ran out
+    c = run.curve
+    found = [g for g in found if not (g.kind in ("LPC", "BPC") and np.isfinite(lam_error)
+                                      and abs(float(c.lam(g.point) if g.lam is None else g.lam) - lam) <= lam_error)]
     return _end_of_family(run, f, data, found, X, ds, message)
 
 

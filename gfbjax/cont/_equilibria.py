@@ -38,7 +38,7 @@ from ._checks import check_field_at, check_finite, check_index, check_located_st
 from ._checkpoint import as_checkpoint, fingerprint
 from ._driver import Curve, continue_curve
 from ._events import (ON_BOUNDARY, critical, crossed_members, matched_crossings, name_crossings as _name_crossings,
-                      side, sign_changes, signed_min)
+                      side, sign_changes, signed_min, untracked)
 from ._newton import NewtonSettings, solve as newton_solve, with_finite_tangent
 from ._problem import EquilibriumProblem
 from ._scalars import strong
@@ -212,6 +212,9 @@ class EquilibriumCurve(Curve):
         """Eigenvalues that crossed the imaginary axis between two points, by matching (:func:`matched_crossings`);
         ``before``, ``after``: the points' ``CRITICAL`` members, each in the units of its whole spectrum."""
         return matched_crossings(before, after, _unstable, _from_axis)
+
+    def untracked(self, before, after):
+        return untracked(before, after, _unstable, _from_axis)
 
     def events(self, prev, cur, kinds):
         found = sign_changes(prev, cur, kinds)

@@ -38,6 +38,7 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from . import _collocation as col
 from ._floquet import nontrivial
@@ -46,6 +47,16 @@ IMAG_TOL = 1e-7  # relative imaginary part below which a multiplier is real
 #: distance from the stability boundary (relative) at which an eigenvalue or multiplier counts as on it: a point
 #: exactly on an event, where the unstable count cannot say on which side the crossing member is
 ON_BOUNDARY = 1e-13
+
+
+def _outside(z: np.ndarray) -> np.ndarray:
+    """Unstable multipliers: outside the unit circle."""
+    return np.abs(z) > 1.0
+
+
+def _from_circle(z: np.ndarray) -> np.ndarray:
+    """Distance of multipliers from the unit circle."""
+    return np.abs(np.abs(z) - 1.0)
 
 
 def _conjugate_closed(nt: np.ndarray) -> np.ndarray:
@@ -91,7 +102,7 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
             "NS": signed_min((1.0 - pp) / (np.abs(pp) + 1.0)),
             "UNSTABLE": float(np.sum(np.abs(nt) > 1.0)),
             "BOUNDARY": float(np.sum(np.abs(np.abs(nt) - 1.0) <= ON_BOUNDARY)),
-            "CRITICAL": critical(nt, lambda z: np.abs(np.abs(z) - 1.0))}
+            "CRITICAL": critical(nt, _from_circle)}
 
 
 def multiplier_crossings(before: np.ndarray, after: np.ndarray) -> int:
@@ -101,7 +112,7 @@ def multiplier_crossings(before: np.ndarray, after: np.ndarray) -> int:
 
 def crossed_multipliers(before: np.ndarray, after: np.ndarray) -> list[int]:
     """:func:`crossed_members` for multipliers (unstable: outside the unit circle)."""
-    return crossed_members(before, after, lambda z: np.abs(z) > 1.0, lambda z: np.abs(np.abs(z) - 1.0))
+    return crossed_members(before, after, _outside, _from_circle)
 
 
 #: How many multipliers cross the unit circle at each event (for the driver's check that a step's sign changes
@@ -148,30 +159,95 @@ def matched_crossings(before: np.ndarray, after: np.ndarray, unstable, distance)
     return len(crossed_members(before, after, unstable, distance))
 
 
-def crossed_members(before: np.ndarray, after: np.ndarray, unstable, distance) -> list[int]:
-    """Indices into ``after`` of the members of the spectrum that changed side between two points, followed by
-    nearest neighbours. A member counts when it and its nearest neighbour at the other point are each other's
-    nearest, nearer than half the distance to any other candidate (a confident match), lie on different sides
-    (``unstable(z)``, boolean array), and neither lies on the boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a
-    point exactly on an event, whose crossing belongs to the step its test value's side gives). Catches what the
-    unstable count cannot: a pair leaving the stable side while another enters in the same step (the count and every
-    test function's sign are then unchanged). Members without a confident match are not counted: a wrong match would
-    report a crossing that did not happen."""
-    a, b = np.asarray(before, complex), np.asarray(after, complex)
-    if a.size == 0 or b.size == 0:
-        return []
+def _matches(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest neighbours from ``a`` to ``b`` (index into ``b`` for each member of ``a``) and whether each match
+    is confident: the two are each other's nearest, nearer than half the distance to any other candidate."""
     d = np.abs(a[:, None] - b[None, :])
     ab, ba = np.argmin(d, axis=1), np.argmin(d, axis=0)
     second_a = np.sort(d, axis=1)[:, 1] if b.size > 1 else np.full(a.size, np.inf)
     second_b = np.sort(d, axis=0)[1, :] if a.size > 1 else np.full(b.size, np.inf)
+    rows = np.arange(a.size)
+    confident = (ba[ab] == rows) & (d[rows, ab] < 0.5 * np.minimum(second_a, second_b[ab]))
+    return ab, confident
+
+
+def crossed_members(before: np.ndarray, after: np.ndarray, unstable, distance) -> list[int]:
+    """Indices into ``after`` of the members of the spectrum that changed side between two points, followed by
+    nearest neighbours. A member counts when it and its nearest neighbour at the other point are a confident
+    match (:func:`_matches`), lie on different sides (``unstable(z)``, boolean array), and neither lies on the
+    boundary (``distance(z)`` <= :data:`ON_BOUNDARY`: a point exactly on an event, whose crossing belongs to the
+    step its test value's side gives). Catches what the unstable count cannot: a pair leaving the stable side while
+    another enters in the same step (the count and every test function's sign are then unchanged). Members without
+    a confident match are not counted: a wrong match would report a crossing that did not happen
+    (:func:`untracked` says when that can hide one)."""
+    a, b = np.asarray(before, complex), np.asarray(after, complex)
+    if a.size == 0 or b.size == 0:
+        return []
+    ab, confident = _matches(a, b)
     ua, ub = unstable(a), unstable(b)
     on_a, on_b = distance(a) <= ON_BOUNDARY, distance(b) <= ON_BOUNDARY
-    out = []
-    for i, j in enumerate(ab):
-        confident = ba[j] == i and d[i, j] < 0.5 * min(second_a[i], second_b[j])
-        if confident and ua[i] != ub[j] and not (on_a[i] or on_b[j]):
-            out.append(int(j))
-    return out
+    return [int(j) for i, j in enumerate(ab) if confident[i] and ua[i] != ub[j] and not (on_a[i] or on_b[j])]
+
+
+#: distance from the stability boundary (relative) within which a member's side is taken as unknown when judging
+#: whether a step's spectrum was tracked: a conservative system's multipliers lie on the unit circle to the
+#: discretisation's accuracy, on either side of it by chance
+SIDE_NOISE = 1e-6
+
+
+def untracked(before: np.ndarray, after: np.ndarray, unstable, distance) -> bool:
+    """Whether the step between two points may hide a member leaving the stable side while another enters, which
+    neither the unstable count nor any test function's sign shows (both cancel), because the spectrum moved too far
+    to be matched (e.g. a multiplier from 0.8 to 10 while another went from 1.6 to 0.7).  A shorter step tells.
+
+    The members that :func:`crossed_members` cannot match confidently, and whose side is known at both points
+    (beyond :data:`SIDE_NOISE`), are paired by the cheapest assignment (sum of distances).  A hidden swap needs a
+    crossing against the net change of the unstable count among them (any crossing when the count is unchanged).
+    The step is untracked when the cheapest assignment has one, or when the cheapest assignment with one costs less
+    than twice the cheapest without: the two readings are then too close to call.  A spectrum
+    that moves fast but keeps its order (a real pair mu, 1/mu of a Mathieu tongue from -3, -0.33 to -5, -0.2:
+    2.1 against 7.5 with crossings) is tracked."""
+    a, b = np.asarray(before, complex), np.asarray(after, complex)
+    if a.size == 0 or b.size == 0:
+        return False
+    ab, confident = _matches(a, b)
+    matched_b = np.zeros(b.size, bool)
+    matched_b[ab[confident]] = True
+    a, b = a[~confident & (distance(a) > SIDE_NOISE)], b[~matched_b & (distance(b) > SIDE_NOISE)]
+    ua, ub = unstable(a), unstable(b)
+    if not (ua.any() and (~ua).any() or ub.any() and (~ub).any()):
+        return False  # every loose member on one side at each point: no swap between them
+    cost = np.abs(a[:, None] - b[None, :])
+    # crossings against the net change of the count are what a hidden swap needs (with the count unchanged, any
+    # crossing): the count's own change forces crossings in its direction, which the driver already sees
+    net = int(ub.sum()) - int(ua.sum())
+    against = (ua[:, None] & ~ub[None, :]) if net > 0 else (~ua[:, None] & ub[None, :]) if net < 0 else \
+        (ua[:, None] != ub[None, :])
+    free = _assignment_cost(cost)
+    staying = _assignment_cost(np.where(against, np.inf, cost))
+    if free < staying:
+        return True
+    # the cheapest reading with such a crossing: one of them fixed, the rest assigned freely
+    crossed = min((cost[i, j] + _assignment_cost(np.delete(np.delete(cost, i, 0), j, 1))
+                   for i, j in zip(*np.nonzero(against))), default=np.inf)
+    return bool(crossed < 2.0 * staying)
+
+
+def _assignment_cost(cost: np.ndarray) -> float:
+    """The least total cost of pairing the rows of ``cost`` with its columns (as many pairs as the shorter side;
+    inf entries are forbidden pairs, inf when no assignment avoids them)."""
+    if cost.size == 0:
+        return 0.0
+    finite = np.isfinite(cost)
+    big = 1.0 + cost.shape[0] * cost.shape[1] * (np.max(cost[finite]) if finite.any() else 1.0)
+    rows, cols = linear_sum_assignment(np.where(finite, cost, big))
+    total = cost[rows, cols]
+    return float(np.sum(total)) if np.all(np.isfinite(total)) else np.inf
+
+
+def untracked_multipliers(before: np.ndarray, after: np.ndarray) -> bool:
+    """:func:`untracked` for multipliers (unstable: outside the unit circle)."""
+    return untracked(before, after, _outside, _from_circle)
 
 
 def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real,

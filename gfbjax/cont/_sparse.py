@@ -50,7 +50,7 @@ from . import _collocation as col
 from ._linear import BoundSolver
 from ._results import Outcome
 from ._newton import LinearSolveError, NewtonSettings, NewtonSolution, solve_host
-from ._sparsity import Coloring, color_pattern, jacobian_values
+from ._sparsity import Coloring, check_pattern, color_pattern, jacobian_values
 from ._sweeps import IntervalSweeps, NewtonPicard
 
 
@@ -91,7 +91,13 @@ def _max_abs(*arrays) -> float:
 
 
 def _sparse_linearisation(o: "SparseCollocation", orbit: col.Orbit, con: col.Constraint) -> IntervalSweeps:
-    """Factorised sparse interval blocks at ``orbit`` with the rows of ``con``."""
+    """Factorised sparse interval blocks at ``orbit`` with the rows of ``con``.  The first one checks the pattern
+    against df/dx at two states of the orbit (:func:`._sparsity.check_pattern`): ValueError when it misses an
+    entry."""
+    if not o.pattern_checked:
+        for x in (orbit.xm[0], orbit.xm[orbit.N // 2]):
+            check_pattern(o.problem.f, x, orbit.lam, o.problem.args, o.coloring, "CycleProblem.jac_sparsity")
+        o.pattern_checked = True
     Kd, ALd, Bp = (np.asarray(a) for a in _linear_data(o.problem.f, o.problem.args, orbit, o.scheme, o._key,
                                                        o._Kperm, o._isdiag))
     mn, n = o.scheme.m * o.n, o.n
@@ -126,6 +132,7 @@ class SparseCollocation(BoundSolver):
         if self._key not in _COLORINGS:
             _COLORINGS[self._key] = color_pattern(pattern)
         self.coloring = _COLORINGS[self._key]
+        self.pattern_checked = False  # against df/dx, on the first linearisation
         m, c = scheme.m, self.coloring
         R, C = c.rows, c.cols
         self._isdiag = jnp.asarray((R == C).astype(float))

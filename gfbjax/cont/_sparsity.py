@@ -12,6 +12,7 @@ values at the pattern's entries (row-major order, diagonal always included) from
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Callable
 
 import jax
@@ -103,3 +104,44 @@ def jacobian_values(fn: Callable[[jax.Array], jax.Array], x: jax.Array, coloring
         JD = jax.vmap(lambda e: vjp(e)[0])(E)  # (n_dense, n)
         vals = jnp.where(jnp.asarray(c.is_dense_entry()), JD[c.dense_row_position(), c.cols], vals)
     return vals
+
+
+@partial(jax.jit, static_argnums=(0, 4))
+def _probe(f, x, lam, args, coloring, v):
+    """J v exactly and the Jacobian's values at the pattern's entries, for f(x, lam, args) at x."""
+    fn = lambda y: f(y, lam, args)
+    return jax.jvp(fn, (x,), (v,))[1], jacobian_values(fn, x, coloring)
+
+
+def check_pattern(f: Callable, x: jax.Array, lam: jax.Array, args, coloring: Coloring, name: str = "jac_sparsity",
+                  seed: int = 0) -> None:
+    """Raise ``ValueError`` when the pattern behind ``coloring`` misses non-zero entries of ``df/dx`` of
+    ``f(x, lam, args)`` at ``x`` (shape (n,)).
+
+    A missing entry is not an error the colouring can see: its derivative is added to another entry of the same
+    colour, or dropped, and every Jacobian built from the pattern is silently wrong (Newton still converges, on
+    the exact residual, but the tangent, the multipliers and the stability are wrong).  The test: one directional
+    derivative J v along a random v against the pattern's J v, equal to rounding when the pattern holds every
+    non-zero entry at ``x`` (one compiled kernel per f and pattern).  On failure the entries outside the pattern
+    are read off the full Jacobian (``n`` JVPs, only then) and the first few named."""
+    c = coloring
+    v = np.random.default_rng(seed).standard_normal(c.n)
+    exact, vals = (np.asarray(a) for a in _probe(f, jnp.asarray(x), jnp.asarray(lam), args, c, jnp.asarray(v)))
+    patterned, scale = np.zeros(c.n), np.zeros(c.n)
+    np.add.at(patterned, c.rows, vals * v[c.cols])
+    np.add.at(scale, c.rows, np.abs(vals * v[c.cols]))
+    gap = np.abs(exact - patterned)
+    # rounding: relative to each row's terms, and to the largest entry for rows whose terms cancel
+    if np.all(gap <= 1e-8 * (np.abs(exact) + scale) + 1e-12 * np.max(np.abs(exact), initial=0.0)):
+        return
+    J = np.asarray(jax.jacfwd(lambda y: f(y, lam, args))(jnp.asarray(x)))
+    inside = np.zeros((c.n, c.n), bool)
+    inside[c.rows, c.cols] = True
+    outside = np.argwhere(~inside & (np.abs(J) > 1e-12 * np.max(np.abs(J))))
+    listed = ", ".join(f"({i}, {j}) = {J[i, j]:.3g}" for i, j in outside[:5])
+    what = (f"leaves out non-zero entries of df/dx (row, column): {listed}{' and more' if len(outside) > 5 else ''} "
+            f"({len(outside)} in all)" if len(outside) else
+            f"does not reproduce df/dx: J v differs by up to {np.max(gap):.3g} from the pattern's J v")
+    raise ValueError(f"{name} {what}, at a state of the first orbit; a Jacobian built from the pattern would be "
+                     "wrong (and with it the multipliers and stability): mark every entry that can be non-zero as "
+                     "True")

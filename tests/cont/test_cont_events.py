@@ -602,3 +602,87 @@ def test_a_branch_point_of_cycles_one_step_from_a_fold_is_found(sb):
     assert sorted(got) == ["BPC", "LPC"], br.special
     assert abs(got["LPC"].lam + 1.0) <= max(got["LPC"].lam_error, 1e-9)
     assert abs(got["BPC"].lam - (sb * sb - 2 * sb)) <= max(got["BPC"].lam_error, 1e-9), got["BPC"]
+
+
+def _two_hopf_pairs(x, lam, a):
+    """Two Hopf points of the origin: lam = 0 (omega 1) and lam = 0.2 (omega 2), both pairs moving out."""
+    return jnp.array([lam * x[0] - x[1], x[0] + lam * x[1],
+                      (lam - 0.2) * x[2] - 2 * x[3], 2 * x[2] + (lam - 0.2) * x[3]])
+
+
+def _two_tori(d, rate2):
+    """A circle r = 1 of period 2 pi with two linear modes: (p, q) leaves the unit circle at lam = 0 (angle
+    0.7 * 2 pi = 2 pi - 1.885), (u, v) enters it at lam = d at ``rate2`` times the speed (angle 1.1 * 2 pi, seen as
+    0.2 pi): multipliers exp(2 pi (lam +- 0.7 i)) and exp(2 pi (-rate2 (lam - d) +- 1.1 i))."""
+    def f(s, lam, a):
+        x, y, p, q, u, v = s
+        g, P, U = 1 - x * x - y * y, p * p + q * q, u * u + v * v
+        a1, a2 = lam, -rate2 * (lam - d)
+        return jnp.array([g * x - y, x + g * y, a1 * p + 0.7 * q - P * p, -0.7 * p + a1 * q - P * q,
+                          a2 * u + 1.1 * v - U * u, -1.1 * u + a2 * v - U * v])
+    return f
+
+
+def _unit_circle(t):
+    return np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)] + [0 * t] * 4, 1)
+
+
+def test_two_hopf_points_in_the_last_step_clipped_onto_the_bound_are_located():
+    """A new user's audit: with ds = 0.4 from lam = -0.5 the last step, clipped onto lam_max = 0.5, held both Hopf
+    points (0 and 0.2); it was never halved (refinement skipped steps placed on a bound), and both were reported
+    at the bound, lam = 0.5 +- 0.6, not located.  The same run with lam_max = 1.5 located them."""
+    br = continue_equilibria(EquilibriumProblem(_two_hopf_pairs, 4),
+                             EquilibriumSettings(ds=0.4, ds_max=2.0, lam_min=-0.5, lam_max=0.5), np.zeros(4), -0.5)
+    assert br.outcome is Outcome.REACHED_END and br.lam[-1] == 0.5
+    hs = br.special_of("HOPF")
+    assert all(h.located for h in hs) and len(hs) == 2, br.special
+    np.testing.assert_allclose([h.lam for h in hs], [0.0, 0.2], atol=1e-9)
+    np.testing.assert_allclose([h.omega for h in hs], [1.0, 2.0], rtol=1e-9)
+
+
+def test_two_torus_points_in_the_last_step_clipped_onto_the_bound_are_located():
+    """The cycle analogue (both pairs leaving the circle, at lam = 0 and 0.2): the NS points were reported at the
+    bound, unlocated, with a spurious BPC."""
+    f = _two_tori(0.2, -1.0)
+    st = CycleSettings(ds=0.4, ds_max=2.0, lam_min=-0.5, lam_max=0.5, N=16, m=4)
+    br = continue_cycles(CycleProblem(f, 6), st, start_from_function(_unit_circle, 2 * np.pi, -0.5, st))
+    assert br.outcome is Outcome.REACHED_END and br.lam[-1] == 0.5
+    assert [s.type for s in br.special] == ["NS", "NS"] and all(s.located for s in br.special), br.special
+    np.testing.assert_allclose([s.lam for s in br.special], [0.0, 0.2], atol=1e-7)
+    np.testing.assert_allclose([s.angle for s in br.special], [0.6 * np.pi, 0.2 * np.pi], rtol=1e-6)
+
+
+@pytest.mark.parametrize("d, rate2, ds", [(0.2, 0.3, 0.2), (0.05, 3.0, 0.05), (0.05, 3.0, 0.2)])
+def test_a_torus_pair_leaving_while_another_enters_in_a_long_step_is_found(d, rate2, ds):
+    """A new user's audit: one pair leaves the unit circle at lam = 0 while another enters at lam = d, both in one
+    step (from -0.037 to 0.363 with ds = 0.2; in the second case a step from -0.006 to 0.061): the unstable count
+    and the NS test's sign are the same at both ends, and the multipliers moved too far (0.79 to 9.8, 1.6 to 0.74)
+    for matching to pair them, so neither point was reported.  A step whose spectrum cannot be matched across the
+    circle is now halved (and, in the second case, such halvings no longer use up the event refinements of later
+    steps).  Both are located, with their angles."""
+    st = CycleSettings(ds=ds, ds_max=2 * ds, lam_min=-0.537, lam_max=0.4, N=16, m=4)
+    br = continue_cycles(CycleProblem(_two_tori(d, rate2), 6), st,
+                         start_from_function(_unit_circle, 2 * np.pi, -0.537, st))
+    assert [s.type for s in br.special] == ["NS", "NS"] and all(s.located for s in br.special), br.special
+    np.testing.assert_allclose([s.lam for s in br.special], [0.0, d], atol=1e-7)
+    np.testing.assert_allclose([s.angle for s in br.special], [0.6 * np.pi, 0.2 * np.pi], rtol=1e-6)
+
+
+def test_a_spectrum_that_moved_too_far_to_match_across_the_circle_is_untracked():
+    """The test behind the halving above, on the multipliers of that step: a pair from 0.79 to 9.8 while another
+    goes from 1.56 to 0.74 (angles fixed) cannot be matched, and they lie on both sides: untracked.  The same pairs
+    moving 1 % are matched (tracked), loose members all inside the circle hide no swap, a real pair mu, 1/mu that
+    moves fast but keeps its order (-3, -0.33 to -5, -0.2: cost 2.1 without crossings, 7.5 with) is tracked, and so
+    are members whose side is noise (a conservative system's pair on the circle to 1e-9)."""
+    from gfbjax.cont._events import untracked_multipliers
+
+    def spectrum(r1, r2):
+        z = [r1 * np.exp(0.6j * np.pi), r2 * np.exp(0.2j * np.pi)]
+        return np.array(z + [np.conj(w) for w in z])
+
+    assert untracked_multipliers(spectrum(0.79, 1.56), spectrum(9.8, 0.74))
+    assert not untracked_multipliers(spectrum(0.79, 1.56), spectrum(0.80, 1.55))
+    assert not untracked_multipliers(spectrum(0.2, 0.3), spectrum(0.05, 0.4))
+    assert not untracked_multipliers(np.array([-3.0, -1 / 3]), np.array([-5.0, -0.2]))
+    on_circle = lambda a: np.array([np.exp(1j * a) * (1 + 1e-9), np.exp(-1j * a) * (1 + 1e-9)])
+    assert not untracked_multipliers(np.r_[on_circle(0.3), 1.5, 0.66], np.r_[on_circle(2.9) * (1 - 2e-9), 1.2, 0.8])

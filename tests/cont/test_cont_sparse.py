@@ -134,6 +134,31 @@ def test_sparse_without_pattern_raises_before_continuing(setup):
         cont.continue_cycles(bare, cont.CycleSettings(linear_solver=SparseSweep(), max_points=2), cont.CycleStart(guess))
 
 
+@pytest.mark.parametrize("drop", ["coupling", "one entry"])
+def test_a_pattern_that_misses_entries_of_the_jacobian_is_refused_at_the_first_linearisation(drop):
+    """A new user's audit: a ring whose pattern left out the coupling (block-diagonal) was accepted; Newton still
+    converged on the exact residual, but the multipliers built from the pattern's Jacobian were 1, 1, 1, 1
+    (analytic: 1, 0.023, 0.023, 0.0019, ...), stable cycles were labelled unstable and spurious BPCs reported.
+    The first linearisation now compares the pattern's J v with the exact one and names the missing entries,
+    before any continuation step; the full pattern passes."""
+    k = 4
+    pattern = ring_pattern(k)
+    if drop == "coupling":
+        pattern = np.kron(np.eye(k, dtype=bool), np.ones((2, 2), bool))
+    else:
+        pattern[0, 2] = False  # oscillator 0's x against oscillator 1's x: the coupling D
+    st = cont.CycleSettings(m=4, N=10, ds=0.05, lam_min=0.5, lam_max=1.0, max_points=3, linear_solver=SparseSweep())
+    r = np.sqrt(LAM)
+    xt = lambda t: r * np.tile(np.stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)], 1), (1, k))
+    start = cont.start_from_function(xt, 2 * np.pi / W, LAM, st)
+    bad = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, D]), jac_sparsity=pattern)
+    with pytest.raises(ValueError, match=r"jac_sparsity leaves out non-zero entries of df/dx .*\(0, 2\) = 1"):
+        cont.continue_cycles(bad, st, start)
+    good = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, D]), jac_sparsity=ring_pattern(k))
+    br = cont.continue_cycles(good, st, start)
+    assert len(br) == 3 and br.stable.all()
+
+
 def _small_ring():
     k = 6
     prob = cont.CycleProblem(f=ring, n=2 * k, args=jnp.array([W, D]), jac_sparsity=ring_pattern(k))

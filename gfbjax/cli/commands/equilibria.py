@@ -242,7 +242,7 @@ def _hopf_cycles(args: argparse.Namespace, params: Any, spec: Any, branch: Any, 
     line = f"  Hopf cycles       {crit}, {len(cyc)} points ({cyc.outcome}: {cyc.message})"
     if first_past:
         line += (f"; first stable cycle past the Hopf speed at {first_past['rpm']:.0f} rpm: amplitude "
-                 f"x {first_past['amplitude_xj_c']:.3f} c, y {first_past['amplitude_yj_c']:.3f} c")
+                 f"x {first_past['amplitude_xj_c']:.3g} c, y {first_past['amplitude_yj_c']:.3g} c")
     print(line, flush=True)
     if not args.no_figures and len(cyc):
         import matplotlib.pyplot as plt

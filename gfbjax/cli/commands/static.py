@@ -167,7 +167,7 @@ def format_summary(res: Any, spec: SystemSpec, system: str) -> str:
         f"({s['q_max'] * c_um:.2f} um)",
         f"  critical eigenvalue  {lam.real:.4g} {'+-' if lam.imag else '+'} {abs(lam.imag):.4g}i per tau  "
         f"({lam.real / ts:.4g} 1/s, {abs(lam.imag) / ts / (2 * math.pi):.1f} Hz): "
-        f"{'STABLE' if res.stable else 'UNSTABLE'}",
+        + ({True: "STABLE", False: "UNSTABLE"}.get(res.stable, "no stability verdict (not an equilibrium)")),
         f"  Newton            residual {res.residual:.2e}, {res.iterations} iterations",
     ]
     return "\n".join(lines)
