@@ -388,8 +388,9 @@ def _n_rotor(rotor: str) -> int:
 def _outside_stacklevel() -> int:
     """The ``stacklevel`` for a warning raised in the caller of this function that names the first frame outside
     gfbjax (and outside the dataclass machinery that calls ``__post_init__``): the user's line."""
-    package = os.path.dirname(os.path.abspath(__file__))
+    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
     frame, level = sys._getframe(1), 1
+    # "<string>": the __init__ that dataclasses generates
     while frame is not None and (frame.f_code.co_filename.startswith(package)
                                  or frame.f_code.co_filename in ("<string>", dataclasses.__file__)):
         frame, level = frame.f_back, level + 1

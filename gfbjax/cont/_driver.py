@@ -419,7 +419,7 @@ def _loop(run: _Run, X0: Any, tau0: Any, restored: Any = None) -> tuple[Outcome,
             # the events of this step are not sought: the ones before the crossing are lost (rare; the steps
             # are short where a cycle grows into contact)
             return _monitor_end(run, X, direction, ds, tests, tests_n, Xn, an_n)
-        if _untracked(c, tests, tests_n) and spectrum_halvings < s.event_refine and 0.5 * ds >= s.ds_min:
+        if s.detect and spectrum_halvings < s.event_refine and 0.5 * ds >= s.ds_min and _untracked(c, tests, tests_n):
             # the spectrum moved too far in the step to be matched across the boundary: one member may have left the
             # stable side while another entered, which no count or sign shows; a shorter step matches it (as the
             # angle test, a control of the step, with its own count: at most event_refine halvings per step)
@@ -767,11 +767,10 @@ def _end_unlocated(run: _Run, X: Any, Xn: Any, an: dict, tau_n: Any, iterations:
     _, shrank, point, continuing = _ENDS[data["type"]]
     message = (f"the cycles {shrank} near lam = {lam:.6g} +- {lam_error:.2g} ({how}): the family ends at {point} "
                f"there ({continuing} continue there)")
-    # a fold or branch point bracketed within the end's error bar is the end's own sign change (lam turns there,
-    # and a multiplier is 1 there): one next to the end would have had a step of its own before the halvings ran out
+    # a fold or branch point found where the orbit has shrunk onto the end is the end's own sign change (lam turns
+    # there, and a multiplier is 1 there), not an event of its own
     c = run.curve
-    found = [g for g in found if not (g.kind in ("LPC", "BPC") and np.isfinite(lam_error)
-                                      and abs(float(c.lam(g.point) if g.lam is None else g.lam) - lam) <= lam_error)]
+    found = [g for g in found if not (g.kind in ("LPC", "BPC") and c.family_ends(g.point, X, Xn) is not None)]
     return _end_of_family(run, f, data, found, X, ds, message)
 
 

@@ -195,18 +195,20 @@ def crossed_members(before: np.ndarray, after: np.ndarray, unstable, distance) -
 SIDE_NOISE = 1e-6
 
 
-def untracked(before: np.ndarray, after: np.ndarray, unstable, distance) -> bool:
+def untracked(before: np.ndarray, after: np.ndarray, unstable, distance, metric=None) -> bool:
     """Whether the step between two points may hide a member leaving the stable side while another enters, which
-    neither the unstable count nor any test function's sign shows (both cancel), because the spectrum moved too far
-    to be matched (e.g. a multiplier from 0.8 to 10 while another went from 1.6 to 0.7).  A shorter step tells.
+    neither the unstable count nor any test function's sign shows (both cancel) and matching cannot see (the
+    spectrum moved too far in the step, e.g. a multiplier from 0.8 to 10 while another went from 1.6 to 0.7).  A
+    shorter step tells.
 
     The members that :func:`crossed_members` cannot match confidently, and whose side is known at both points
-    (beyond :data:`SIDE_NOISE`), are paired by the cheapest assignment (sum of distances).  A hidden swap needs a
-    crossing against the net change of the unstable count among them (any crossing when the count is unchanged).
-    The step is untracked when the cheapest assignment has one, or when the cheapest assignment with one costs less
-    than twice the cheapest without: the two readings are then too close to call.  A spectrum
-    that moves fast but keeps its order (a real pair mu, 1/mu of a Mathieu tongue from -3, -0.33 to -5, -0.2:
-    2.1 against 7.5 with crossings) is tracked."""
+    (beyond :data:`SIDE_NOISE`), are paired by the least total distance (``metric(a, b)``, a matrix; default
+    ``|a - b|``).  A hidden swap needs a crossing against the net change of the unstable count among them (any
+    crossing when the count is unchanged).  The step is untracked when the cheapest pairing has one, or when the
+    cheapest pairing with one costs less extra than the two members it moves had moved in the cheapest pairing
+    without: the two readings are then too close to call.  A spectrum that moves fast but keeps its order (a real
+    pair mu, 1/mu of a Mathieu tongue from -3, -0.33 to -5, -0.2) is tracked.  Not seen: a swap whose member was
+    matched confidently to the wrong partner (0.8 to 0.7 while 1.6 went to 10 and 0.8 in fact to 10)."""
     a, b = np.asarray(before, complex), np.asarray(after, complex)
     if a.size == 0 or b.size == 0:
         return False
@@ -214,40 +216,54 @@ def untracked(before: np.ndarray, after: np.ndarray, unstable, distance) -> bool
     matched_b = np.zeros(b.size, bool)
     matched_b[ab[confident]] = True
     a, b = a[~confident & (distance(a) > SIDE_NOISE)], b[~matched_b & (distance(b) > SIDE_NOISE)]
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
     ua, ub = unstable(a), unstable(b)
     if not (ua.any() and (~ua).any() or ub.any() and (~ub).any()):
         return False  # every loose member on one side at each point: no swap between them
-    cost = np.abs(a[:, None] - b[None, :])
-    # crossings against the net change of the count are what a hidden swap needs (with the count unchanged, any
-    # crossing): the count's own change forces crossings in its direction, which the driver already sees
+    cost = np.abs(a[:, None] - b[None, :]) if metric is None else metric(a, b)
+    # the count's own change forces crossings in its direction, which the driver already sees
     net = int(ub.sum()) - int(ua.sum())
     against = (ua[:, None] & ~ub[None, :]) if net > 0 else (~ua[:, None] & ub[None, :]) if net < 0 else \
         (ua[:, None] != ub[None, :])
-    free = _assignment_cost(cost)
-    staying = _assignment_cost(np.where(against, np.inf, cost))
-    if free < staying:
+    staying, rows, cols = _assignment(np.where(against, np.inf, cost))
+    if _assignment(cost)[0] < staying:
         return True
-    # the cheapest reading with such a crossing: one of them fixed, the rest assigned freely
-    crossed = min((cost[i, j] + _assignment_cost(np.delete(np.delete(cost, i, 0), j, 1))
-                   for i, j in zip(*np.nonzero(against))), default=np.inf)
-    return bool(crossed < 2.0 * staying)
+    moved_a = np.zeros(a.size)  # each member's distance in the pairing without such a crossing
+    moved_a[rows] = cost[rows, cols]
+    partner_of_b = np.full(b.size, -1)
+    partner_of_b[cols] = rows
+    for i, j in zip(*np.nonzero(against)):
+        # the cheapest reading with member i going to j, the rest paired freely
+        crossed = cost[i, j] + _assignment(np.delete(np.delete(cost, i, 0), j, 1))[0]
+        if crossed - staying < moved_a[i] + (moved_a[partner_of_b[j]] if partner_of_b[j] >= 0 else 0.0):
+            return True
+    return False
 
 
-def _assignment_cost(cost: np.ndarray) -> float:
+def log_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distances between multipliers as Floquet exponents (log mu, its angle wrapped to (-pi, pi]): a multiplier
+    exp(sigma T) moves by the change of sigma T whatever its size, so a large one that triples is as far as a
+    small one that triples."""
+    la, lb = np.log(np.maximum(np.abs(a), 1e-300)), np.log(np.maximum(np.abs(b), 1e-300))
+    turn = np.angle(np.exp(1j * (np.angle(a)[:, None] - np.angle(b)[None, :])))
+    return np.hypot(la[:, None] - lb[None, :], turn)
+
+
+def _assignment(cost: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """The least total cost of pairing the rows of ``cost`` with its columns (as many pairs as the shorter side;
-    inf entries are forbidden pairs, inf when no assignment avoids them)."""
+    inf entries are forbidden pairs: inf when no assignment avoids them), with the pairs (rows, cols)."""
     if cost.size == 0:
-        return 0.0
+        return 0.0, np.zeros(0, int), np.zeros(0, int)
     finite = np.isfinite(cost)
     big = 1.0 + cost.shape[0] * cost.shape[1] * (np.max(cost[finite]) if finite.any() else 1.0)
     rows, cols = linear_sum_assignment(np.where(finite, cost, big))
     total = cost[rows, cols]
-    return float(np.sum(total)) if np.all(np.isfinite(total)) else np.inf
+    return (float(np.sum(total)) if np.all(np.isfinite(total)) else np.inf), rows, cols
 
 
 def untracked_multipliers(before: np.ndarray, after: np.ndarray) -> bool:
     """:func:`untracked` for multipliers (unstable: outside the unit circle)."""
-    return untracked(before, after, _outside, _from_circle)
+    return untracked(before, after, _outside, _from_circle, log_distance)
 
 
 def name_crossings(spectrum: np.ndarray, count: int, distance, pair: str, real,
