@@ -144,6 +144,15 @@ def test_reference_dimensionless_groups_by_hand():
     assert reference_system(load=10.0).nondim().w_ext == pytest.approx(10.0 / (1e5 * 19.05e-3 * 38.1e-3))
 
 
+@pytest.mark.parametrize("convert, name", [("omega_bar", "rpm"), ("rpm", "omega_bar")])
+def test_speed_conversions_refuse_negative_speeds(convert, name):
+    """A new user's audit: spec.omega_bar(-100.0) returned -0.0028 (NaN was refused, a negative speed was not)."""
+    spec = reference_system()
+    with pytest.raises(ParameterError, match=f"{name} must be >= 0"):
+        getattr(spec, convert)(-100.0)
+    assert getattr(spec, convert)(0.0) == 0.0
+
+
 def test_validation_case_groups():
     spec = validation_case(15.0)
     p = spec.nondim()
