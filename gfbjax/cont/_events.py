@@ -100,8 +100,8 @@ def cycle_test_functions(mu: np.ndarray, n_trivial: int, tangent_lam: float) -> 
             "PD": signed_min((nt + 1.0) / (np.abs(nt) + 1.0)),
             "BPC": signed_min((1.0 - nt) / (np.abs(nt) + 1.0)),
             "NS": signed_min((1.0 - pp) / (np.abs(pp) + 1.0)),
-            "UNSTABLE": float(np.sum(np.abs(nt) > 1.0)),
-            "BOUNDARY": float(np.sum(np.abs(np.abs(nt) - 1.0) <= ON_BOUNDARY)),
+            "UNSTABLE": float(np.sum(_outside(nt))),
+            "BOUNDARY": float(np.sum(_from_circle(nt) <= ON_BOUNDARY)),
             "CRITICAL": critical(nt, _from_circle)}
 
 
@@ -198,8 +198,8 @@ SIDE_NOISE = 1e-6
 def untracked(before: np.ndarray, after: np.ndarray, unstable, distance, metric=None) -> bool:
     """Whether the step between two points may hide a member leaving the stable side while another enters, which
     neither the unstable count nor any test function's sign shows (both cancel) and matching cannot see (the
-    spectrum moved too far in the step, e.g. a multiplier from 0.8 to 10 while another went from 1.6 to 0.7).  A
-    shorter step tells.
+    spectrum moved too far in the step, e.g. a pair from modulus 0.79 to 9.8 while another, at another angle, went
+    from 1.56 to 0.74).  A shorter step tells.
 
     The members that :func:`crossed_members` cannot match confidently, and whose side is known at both points
     (beyond :data:`SIDE_NOISE`), are paired by the least total distance (``metric(a, b)``, a matrix; default
